@@ -1,0 +1,40 @@
+# Every target bootstraps .venv on a fresh machine.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test bench benchmark sysdeps clean
+
+$(STAMP): pyproject.toml
+	@$(MAKE) --no-print-directory sysdeps
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+# Headless OpenGL on a CPU-only machine needs Mesa's EGL.
+sysdeps:
+	@if ! ldconfig -p | grep -q 'libEGL_mesa.so' ; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "installing Mesa EGL (libegl1 libegl-mesa0 libgl1-mesa-dri)"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libegl1 libegl-mesa0 libgl1-mesa-dri >/dev/null; \
+	  else \
+	    echo "Mesa EGL is missing: run 'sudo apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri' and retry"; exit 1; \
+	  fi; \
+	fi
+
+demo: $(STAMP)
+	$(VENV)/bin/depthtrack demo --out demo-output
+
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+bench: $(STAMP)
+	$(VENV)/bin/depthtrack bench
+
+benchmark: $(STAMP)
+	$(VENV)/bin/depthtrack benchmark-motions --data ../shared/data --out benchmark-output
+
+clean:
+	rm -rf $(VENV) demo-output benchmark-output
