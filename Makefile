@@ -33,8 +33,9 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(VENV)/bin/depthtrack bench
 
+# Synthetic ToF sequences from ../shared/data, all three trackers, and the likelihood comparison.
 benchmark: $(STAMP)
-	$(VENV)/bin/depthtrack benchmark-motions --data ../shared/data --out benchmark-output
+	DEPTHTRACK=$(VENV)/bin/depthtrack tools/benchmark.sh ../shared/data benchmark-output
 
 clean:
 	rm -rf $(VENV) demo-output benchmark-output

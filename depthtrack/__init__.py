@@ -4,7 +4,8 @@ The public names are re-exported here; see the README for a tour.
 """
 from .contract import JOINT_NAMES
 from .errors import InputError
+from .body import BodyModel
 
 __version__ = "0.1.0"
 
-__all__ = ["JOINT_NAMES", "InputError", "__version__"]
+__all__ = ["JOINT_NAMES", "InputError", "BodyModel", "__version__"]

@@ -1,0 +1,70 @@
+"""``depthtrack eval``: track sequences with several methods and score them against ground truth."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..errors import InputError
+
+
+_EPILOG = """examples:
+  depthtrack eval seqs/walk seqs/run --methods hc,hc+ep --report eval-report
+  depthtrack eval seqs/walk --likelihood pixel --json > walk.json
+  depthtrack eval seqs/walk seqs/walk --track out/walk_hc out/walk_hcep --json
+
+Overall figures average the sequences, each weighing the same (frames: the total).
+Results go to stdout (a table, or JSON with --json); progress to stderr."""
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "eval",
+        help="score tracking methods against the ground truth of depth sequences",
+        description="Track each sequence with each method (or read existing track outputs with "
+                    "--track) and score the result against the sequence's ground truth: mean "
+                    "joint error, the worst joint's error averaged over frames, the fraction of "
+                    "joints within 10 cm, the paper's average and maximum marker errors (when the "
+                    "sequence has markers) and frames per second; per sequence and averaged over "
+                    "sequences (each sequence weighing the same).",
+        epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("sequences", nargs="+", metavar="SEQ",
+                   help="sequence directory (or .npz) with groundtruth/joints.csv and/or markers.csv")
+    p.add_argument("--methods", default=None,
+                   help="comma-separated tracking methods from hc, ep, hc+ep (default: all three; "
+                        "not with --track)")
+    p.add_argument("--likelihood", choices=("smoothed", "pixel"), default="smoothed",
+                   help="likelihood the tracker scores candidates with (default smoothed)")
+    p.add_argument("--track", nargs="+", metavar="DIR", default=None,
+                   help="score existing track outputs instead of tracking: one per SEQ, in order "
+                        "(repeat a SEQ to score several tracks of it); the method name comes from "
+                        "each track's summary.json")
+    p.add_argument("--report", metavar="DIR", default=None,
+                   help="write metrics.json, report.md, errors.csv and plots into DIR (replaced)")
+    p.add_argument("--json", action="store_true",
+                   help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout')
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..evaluate.report import format_text_table, write_report
+    from ..evaluate.runs import METHODS, evaluate, print_line
+
+    if args.track is not None and args.methods is not None:
+        raise InputError(None, "--methods and --track exclude each other (a track's method is in "
+                               "its summary.json)")
+    methods = METHODS if args.methods is None else args.methods.split(",")
+    evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
+                          track_dirs=args.track, quiet=args.quiet,
+                          log=None if args.quiet else print_line)
+    data = evaluation.to_dict()
+    written = write_report(evaluation, args.report) if args.report else None
+    if args.json:
+        sys.stdout.write(json.dumps(data, indent=1) + "\n")
+    else:
+        sys.stdout.write(format_text_table(evaluation, data))
+    if written and not args.quiet:
+        print(f"report: {args.report}/report.md (metrics.json, errors.csv, "
+              f"{', '.join(n for n in written if n.endswith('.png'))})", file=sys.stderr)
+    return 0

@@ -1,0 +1,580 @@
+"""Depth sequences: the ``SEQ/`` directory contract and its single-file ``.npz`` twin.
+
+Directory form (see ARCHITECTURE.md, "Depth sequence")::
+
+    SEQ/sequence.json
+    SEQ/depth/000000.png ...        16-bit single-channel PNG; value * depth_scale = z (m)
+    SEQ/groundtruth/joints.csv      optional: frame,joint,x,y,z  (the 15 contract joints)
+    SEQ/groundtruth/markers.csv     optional: frame,marker,x,y,z
+
+``.npz`` form: ``meta`` (the sequence.json text), ``depth`` (F, H, W) uint16 raw
+values, and optionally ``joints`` (F, 15, 3), ``markers`` (F, M, 3), ``marker_names``
+(M,). Directory frames load lazily, one PNG per :meth:`Sequence.depth` call; only the
+PNG headers are read when the sequence is opened. A ``.npz`` is read whole on first use.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import re
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from ..camera import Camera
+from ..contract import JOINT_NAMES, SEQUENCE_FORMAT
+from ..errors import InputError
+from .atomic import atomic_path
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_FRAME_NAME = re.compile(r"^(\d+)\.png$")
+#: Largest raw value a 16-bit PNG holds.
+MAX_RAW = 65535
+
+
+# ------------------------------------------------------------------ PNG helpers
+def png_header(path):
+    """``(width, height, bit_depth, colour_type)`` from a PNG's IHDR chunk (reads 33 bytes).
+
+    Raises
+    ------
+    InputError
+        Not a PNG, or unreadable.
+    """
+    try:
+        with open(path, "rb") as f:
+            head = f.read(33)
+    except OSError as exc:
+        raise InputError(path, f"cannot read ({exc.strerror or exc})") from None
+    if len(head) < 33 or head[:8] != _PNG_SIGNATURE or head[12:16] != b"IHDR":
+        raise InputError(path, "not a PNG file")
+    width, height, bit_depth, colour_type = struct.unpack(">IIBB", head[16:26])
+    return width, height, bit_depth, colour_type
+
+
+def _read_png16(path) -> np.ndarray:
+    import cv2
+
+    raw = cv2.imread(os.fspath(path), cv2.IMREAD_UNCHANGED)
+    if raw is None:
+        raise InputError(path, "cannot decode PNG")
+    if raw.dtype != np.uint16 or raw.ndim != 2:
+        raise InputError(path, f"PNG is not 16-bit single channel ({raw.dtype}, shape {raw.shape})")
+    return raw
+
+
+def _write_png16(path, raw: np.ndarray) -> None:
+    import cv2
+
+    if not cv2.imwrite(os.fspath(path), np.ascontiguousarray(raw, dtype=np.uint16),
+                       [cv2.IMWRITE_PNG_COMPRESSION, 1]):
+        raise OSError(f"could not write {path}")
+
+
+def depth_to_raw(depth, depth_scale: float) -> np.ndarray:
+    """Quantise metric depth to raw 16-bit values.
+
+    Parameters
+    ----------
+    depth : (H, W) float
+        Metres; 0, negative or non-finite = no reading.
+    depth_scale : float
+        Metres per raw unit.
+
+    Returns
+    -------
+    raw : (H, W) uint16
+
+    Raises
+    ------
+    ValueError
+        A depth beyond what 16 bits hold at this scale.
+    """
+    depth = np.asarray(depth, dtype=np.float64)
+    valid = np.isfinite(depth) & (depth > 0)
+    raw = np.zeros(depth.shape, dtype=np.float64)
+    raw[valid] = np.rint(depth[valid] / depth_scale)
+    if raw.max(initial=0) > MAX_RAW:
+        raise ValueError(f"depth {depth[valid].max():.3f} m exceeds the 16-bit range at "
+                         f"depth_scale {depth_scale} ({MAX_RAW * depth_scale:.3f} m)")
+    return raw.astype(np.uint16)
+
+
+# ------------------------------------------------------------------- metadata
+def _finite_positive(value, what, path):
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise InputError(path, f"{what} is not a number ({value!r})") from None
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(path, f"{what} must be a positive finite number, not {value!r}")
+    return value
+
+
+def _parse_meta(text: str, path):
+    try:
+        meta = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"invalid JSON (line {exc.lineno}: {exc.msg})") from None
+    if not isinstance(meta, dict):
+        raise InputError(path, "sequence.json must hold a JSON object")
+    fmt = meta.get("format")
+    if fmt != SEQUENCE_FORMAT:
+        raise InputError(path, f"unknown format version {fmt!r} (expected {SEQUENCE_FORMAT!r})")
+    for key in ("fps", "depth_scale", "camera"):
+        if key not in meta:
+            raise InputError(path, f"missing {key!r}")
+    fps = _finite_positive(meta["fps"], "fps", path)
+    depth_scale = _finite_positive(meta["depth_scale"], "depth_scale", path)
+    if not isinstance(meta["camera"], dict):
+        raise InputError(path, "camera must be an object")
+    try:
+        camera = Camera.from_dict(meta["camera"], path)
+    except InputError as exc:
+        raise InputError(path, exc.problem) from None
+    height = None
+    subject = meta.get("subject")
+    if subject is not None:
+        if not isinstance(subject, dict):
+            raise InputError(path, "subject must be an object")
+        if subject.get("height_m") is not None:
+            height = _finite_positive(subject["height_m"], "subject.height_m", path)
+    return meta, camera, fps, depth_scale, height
+
+
+def _build_meta(camera: Camera, fps, depth_scale, subject=None, extra=None) -> dict:
+    meta = {"format": SEQUENCE_FORMAT, "fps": float(fps), "depth_scale": float(depth_scale),
+            "camera": camera.to_dict()}
+    if subject is not None:
+        meta["subject"] = {"height_m": float(subject)} if np.isscalar(subject) else dict(subject)
+    if extra:
+        for key, value in extra.items():
+            if key in meta:
+                raise ValueError(f"extra key {key!r} would overwrite a contract field")
+            meta[key] = value
+    return meta
+
+
+# ---------------------------------------------------------------- ground truth
+def read_points_csv(path, n_frames: int, kind: str, names=None):
+    """Read ``frame,<kind>,x,y,z`` rows into a (F, N, 3) array.
+
+    Parameters
+    ----------
+    path : path-like
+    n_frames : int
+        F; a frame outside ``0..F-1`` is an error.
+    kind : {"joint", "marker"}
+        The header's second column.
+    names : sequence of str or None
+        Allowed names in array order (joints); ``None`` = names in order of first
+        appearance (markers).
+
+    Returns
+    -------
+    points : (F, N, 3) float
+        NaN where a row is absent (unknown).
+    names : list of str, (N,)
+    """
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(path, f"cannot read ({getattr(exc, 'strerror', None) or exc})") from None
+    rows = list(csv.reader(io.StringIO(text)))
+    while rows and not rows[-1]:
+        rows.pop()
+    expected = ["frame", kind, "x", "y", "z"]
+    if not rows or [c.strip() for c in rows[0]] != expected:
+        raise InputError(path, f"line 1: header must be {','.join(expected)}")
+    fixed = names is not None
+    index = {n: i for i, n in enumerate(names)} if fixed else {}
+    order = list(names) if fixed else []
+    frames, slots, values = [], [], []
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != 5:
+            raise InputError(path, f"line {line}: expected 5 fields, found {len(row)}")
+        frame_text, name = row[0].strip(), row[1].strip()
+        if not frame_text.isdigit():
+            raise InputError(path, f"line {line}: frame {frame_text!r} is not a whole number")
+        frame = int(frame_text)
+        if frame >= n_frames:
+            raise InputError(path, f"line {line}: frame {frame} is beyond the sequence ({n_frames} frames)")
+        if name not in index:
+            if fixed:
+                raise InputError(path, f"line {line}: unknown {kind} name {name!r}")
+            if not name:
+                raise InputError(path, f"line {line}: empty {kind} name")
+            index[name] = len(order)
+            order.append(name)
+        try:
+            xyz = [float(v) for v in row[2:]]
+        except ValueError:
+            raise InputError(path, f"line {line}: coordinate is not a number") from None
+        if not all(math.isfinite(v) for v in xyz):
+            raise InputError(path, f"line {line}: non-finite coordinate")
+        frames.append(frame)
+        slots.append(index[name])
+        values.append(xyz)
+    points = np.full((n_frames, len(order), 3), np.nan)
+    if frames:
+        frames_a, slots_a = np.asarray(frames), np.asarray(slots)
+        key = frames_a * len(order) + slots_a
+        uniq, counts = np.unique(key, return_counts=True)
+        if np.any(counts > 1):
+            dup = uniq[counts > 1][0]
+            raise InputError(path, f"frame {dup // len(order)} lists {kind} "
+                                   f"{order[dup % len(order)]!r} twice")
+        points[frames_a, slots_a] = np.asarray(values)
+    return points, order
+
+
+def format_points_csv(points, names, kind: str) -> str:
+    """``frame,<kind>,x,y,z`` text for (F, N, 3) points; NaN rows are left out."""
+    points = np.asarray(points, dtype=float)
+    out = io.StringIO()
+    out.write(f"frame,{kind},x,y,z\n")
+    known = np.all(np.isfinite(points), axis=-1)
+    for f, n in zip(*np.nonzero(known)):
+        x, y, z = points[f, n]
+        out.write(f"{f},{names[n]},{x:.6f},{y:.6f},{z:.6f}\n")
+    return out.getvalue()
+
+
+# ------------------------------------------------------------------- sequence
+class Sequence:
+    """A depth sequence opened from a directory or a ``.npz``; frames load on demand.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+    camera : Camera
+    fps : float
+    depth_scale : float
+        Metres per raw 16-bit unit.
+    subject_height : float or None
+        Metres, from ``subject.height_m``.
+    meta : dict
+        The whole sequence.json (``"synth"`` included when present).
+    """
+
+    def __init__(self, path, meta, camera, fps, depth_scale, subject_height, n_frames,
+                 frame_files=None, npz_path=None, joints_path=None, markers_path=None):
+        self.path = Path(path)
+        self.meta = meta
+        self.camera = camera
+        self.fps = fps
+        self.depth_scale = depth_scale
+        self.subject_height = subject_height
+        self._n = n_frames
+        self._frame_files = frame_files
+        self._npz_path = npz_path
+        self._npz = None
+        self._joints_path = joints_path
+        self._markers_path = markers_path
+        self._joints = self._markers = self._marker_names = None
+        self._loaded_gt = False
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __iter__(self):
+        for i in range(self._n):
+            yield self.depth(i)
+
+    def __repr__(self):
+        return (f"Sequence({str(self.path)!r}, frames={self._n}, fps={self.fps}, "
+                f"camera={self.camera.width}x{self.camera.height})")
+
+    @property
+    def duration(self) -> float:
+        """Seconds covered by the frames."""
+        return self._n / self.fps
+
+    def _npz_data(self):
+        if self._npz is None:
+            with np.load(self._npz_path, allow_pickle=False) as data:
+                self._npz = {k: data[k] for k in data.files}
+        return self._npz
+
+    def raw_depth(self, i: int) -> np.ndarray:
+        """(H, W) uint16: frame ``i`` as stored."""
+        if not -self._n <= i < self._n:
+            raise IndexError(f"frame {i} out of range ({self._n} frames)")
+        i %= self._n
+        if self._frame_files is not None:
+            path = self._frame_files[i]
+            raw = _read_png16(path)
+            if raw.shape != self.camera.shape:
+                raise InputError(path, f"frame is {raw.shape[1]} x {raw.shape[0]}, camera is "
+                                       f"{self.camera.width} x {self.camera.height}")
+            return raw
+        return self._npz_data()["depth"][i]
+
+    def depth(self, i: int) -> np.ndarray:
+        """(H, W) float32: camera-frame z of frame ``i`` in metres, 0 = no reading."""
+        return (self.raw_depth(i).astype(np.float64) * self.depth_scale).astype(np.float32)
+
+    def _load_ground_truth(self):
+        if self._loaded_gt:
+            return
+        if self._frame_files is not None:
+            if self._joints_path is not None:
+                self._joints, _ = read_points_csv(self._joints_path, self._n, "joint", JOINT_NAMES)
+            if self._markers_path is not None:
+                # sequence.json may fix the marker order; otherwise first appearance.
+                names = self.meta.get("marker_names")
+                self._markers, self._marker_names = read_points_csv(
+                    self._markers_path, self._n, "marker",
+                    names if isinstance(names, list) and names else None)
+        else:
+            data = self._npz_data()
+            if "joints" in data:
+                self._joints = data["joints"].astype(float)
+            if "markers" in data:
+                self._markers = data["markers"].astype(float)
+                self._marker_names = [str(n) for n in data.get("marker_names", [])]
+        self._loaded_gt = True
+
+    @property
+    def joints(self):
+        """(F, 15, 3) float ground-truth joints (NaN where unknown), or None."""
+        self._load_ground_truth()
+        return self._joints
+
+    @property
+    def markers(self):
+        """(F, M, 3) float ground-truth markers (NaN where unknown), or None."""
+        self._load_ground_truth()
+        return self._markers
+
+    @property
+    def marker_names(self):
+        """list of str, (M,), or None."""
+        self._load_ground_truth()
+        return self._marker_names
+
+
+def _open_directory(path: Path) -> Sequence:
+    meta_path = path / "sequence.json"
+    try:
+        text = meta_path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(meta_path, "missing sequence.json (not a depth sequence directory)") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(meta_path, f"cannot read ({getattr(exc, 'strerror', None) or exc})") from None
+    meta, camera, fps, depth_scale, height = _parse_meta(text, meta_path)
+
+    depth_dir = path / "depth"
+    if not depth_dir.is_dir():
+        raise InputError(depth_dir, "missing depth/ directory")
+    numbered = []
+    for entry in os.scandir(depth_dir):
+        if not entry.name.lower().endswith(".png"):
+            continue
+        match = _FRAME_NAME.match(entry.name)
+        if not match:
+            raise InputError(entry.path, "frame file name is not a frame number (NNNNNN.png)")
+        numbered.append((int(match.group(1)), entry.path))
+    if not numbered:
+        raise InputError(depth_dir, "empty sequence: no depth frames")
+    numbered.sort()
+    numbers = np.array([n for n, _ in numbered])
+    expected = np.arange(len(numbers))
+    if np.any(numbers != expected):
+        k = int(np.flatnonzero(numbers != expected)[0])
+        if k < len(numbers) and k > 0 and numbers[k] == numbers[k - 1]:
+            raise InputError(numbered[k][1], f"frame number {numbers[k]} appears twice")
+        raise InputError(depth_dir, f"gap in frame numbering: frame {k} is missing "
+                                    f"(next is {numbers[k]})")
+    files = [p for _, p in numbered]
+    for f in files:
+        width, height_px, bit_depth, colour = png_header(f)
+        if bit_depth != 16 or colour != 0:
+            raise InputError(f, f"PNG is not 16-bit single channel (bit depth {bit_depth}, colour type {colour})")
+        if (width, height_px) != (camera.width, camera.height):
+            raise InputError(f, f"frame is {width} x {height_px}, camera is {camera.width} x {camera.height}")
+    gt = path / "groundtruth"
+    joints = gt / "joints.csv"
+    markers = gt / "markers.csv"
+    return Sequence(path, meta, camera, fps, depth_scale, height, len(files), frame_files=files,
+                    joints_path=joints if joints.is_file() else None,
+                    markers_path=markers if markers.is_file() else None)
+
+
+def _open_npz(path: Path) -> Sequence:
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            files = set(data.files)
+            if "meta" not in files or "depth" not in files:
+                raise InputError(path, "not a depth sequence .npz (needs 'meta' and 'depth')")
+            text = str(data["meta"])
+            depth = data["depth"]
+            arrays = {k: data[k] for k in files}
+    except InputError:
+        raise
+    except Exception as exc:  # zipfile / format errors from numpy
+        raise InputError(path, f"cannot read .npz ({exc})") from None
+    meta, camera, fps, depth_scale, height = _parse_meta(text, path)
+    if depth.dtype != np.uint16 or depth.ndim != 3:
+        raise InputError(path, f"depth must be (F, H, W) uint16, not {depth.dtype} {depth.shape}")
+    if depth.shape[0] == 0:
+        raise InputError(path, "empty sequence: no depth frames")
+    if depth.shape[1:] != camera.shape:
+        raise InputError(path, f"frames are {depth.shape[2]} x {depth.shape[1]}, camera is "
+                               f"{camera.width} x {camera.height}")
+    n = depth.shape[0]
+    if "joints" in arrays and arrays["joints"].shape != (n, len(JOINT_NAMES), 3):
+        raise InputError(path, f"joints must be ({n}, 15, 3), not {arrays['joints'].shape}")
+    if "markers" in arrays:
+        m = arrays["markers"]
+        names = arrays.get("marker_names")
+        if m.ndim != 3 or m.shape[0] != n or m.shape[2] != 3 or names is None or len(names) != m.shape[1]:
+            raise InputError(path, f"markers must be ({n}, M, 3) with M marker_names")
+    for key in ("joints", "markers"):
+        if key in arrays:
+            a = arrays[key]
+            if np.any(np.isinf(a)):
+                raise InputError(path, f"{key} hold infinite values")
+    seq = Sequence(path, meta, camera, fps, depth_scale, height, n, npz_path=path)
+    seq._npz = arrays
+    return seq
+
+
+def open_sequence(path) -> Sequence:
+    """Open a depth sequence directory or ``.npz`` file.
+
+    Validates everything that can be checked cheaply: sequence.json, frame numbering,
+    every PNG header (16-bit single channel, camera size). Pixels and ground truth are
+    read on first use.
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the problem.
+    """
+    path = Path(path)
+    if path.is_dir():
+        return _open_directory(path)
+    if path.suffix.lower() == ".npz":
+        if not path.is_file():
+            raise InputError(path, "no such file")
+        return _open_npz(path)
+    if not path.exists():
+        raise InputError(path, "no such sequence directory or .npz file")
+    raise InputError(path, "not a sequence directory or .npz file")
+
+
+def _check_points(name, points, n_frames, n_points=None):
+    points = np.asarray(points, dtype=float)
+    if points.ndim != 3 or points.shape[0] != n_frames or points.shape[2] != 3 or \
+            (n_points is not None and points.shape[1] != n_points):
+        want = f"({n_frames}, {n_points if n_points is not None else 'M'}, 3)"
+        raise ValueError(f"{name} must be {want}, not {points.shape}")
+    if np.any(np.isinf(points)):
+        raise ValueError(f"{name} hold infinite values (use NaN for unknown)")
+    return points
+
+
+def write_sequence(path, depths, camera: Camera, fps: float, depth_scale: float = 0.001,
+                   joints=None, markers=None, marker_names=None, subject=None, extra=None):
+    """Write a depth sequence atomically (a directory, or one file if ``path`` ends in .npz).
+
+    Parameters
+    ----------
+    path : path-like
+        Output directory (replaced as a whole) or ``.npz`` file.
+    depths : (F, H, W) float array or iterable of (H, W) float
+        Metres; 0 or non-finite = no reading. An iterable is consumed frame by frame
+        (directory form), so a long sequence need not fit in memory.
+    camera : Camera
+    fps : float
+    depth_scale : float
+        Metres per raw unit of the 16-bit PNGs.
+    joints : (F, 15, 3) float or None
+        Contract joints, camera frame, NaN = unknown.
+    markers : (F, M, 3) float or None
+    marker_names : sequence of str, (M,)
+    subject : float or dict or None
+        Subject height in metres, or the ``subject`` object.
+    extra : dict or None
+        More top-level sequence.json fields (e.g. ``{"synth": {...}}``).
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    path = Path(path)
+    fps = float(fps)
+    if not (math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps must be positive, not {fps}")
+    if not (math.isfinite(depth_scale) and depth_scale > 0):
+        raise ValueError(f"depth_scale must be positive, not {depth_scale}")
+    extra = dict(extra or {})
+    if markers is not None:
+        if marker_names is None:
+            raise ValueError("markers need marker_names")
+        marker_names = [str(n) for n in marker_names]
+        if len(set(marker_names)) != len(marker_names) or any(
+                not n or "," in n or n != n.strip() for n in marker_names):
+            raise ValueError("marker names must be unique, non-empty, without commas or padding")
+        # Keeps the column order when a marker is missing from the first frames.
+        extra["marker_names"] = marker_names
+    meta = _build_meta(camera, fps, depth_scale, subject, extra)
+
+    def check_frame(i, depth):
+        depth = np.asarray(depth)
+        if depth.shape != camera.shape:
+            raise ValueError(f"frame {i} is {depth.shape}, camera is {camera.shape}")
+        return depth_to_raw(depth, depth_scale)
+
+    if path.suffix.lower() == ".npz":
+        frames = [check_frame(i, d) for i, d in enumerate(depths)]
+        if not frames:
+            raise ValueError("empty sequence: no frames")
+        raw = np.stack(frames)
+        n = len(raw)
+        arrays = {"meta": np.array(json.dumps(meta, indent=1)), "depth": raw}
+        if joints is not None:
+            arrays["joints"] = _check_points("joints", joints, n, len(JOINT_NAMES))
+        if markers is not None:
+            arrays["markers"] = _check_points("markers", markers, n, len(marker_names))
+            arrays["marker_names"] = np.array(marker_names)
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as f:
+                np.savez_compressed(f, **arrays)
+        return path
+
+    with atomic_path(path) as tmp:
+        tmp = Path(tmp)
+        (tmp / "depth").mkdir(parents=True)
+        n = 0
+        for i, depth in enumerate(depths):
+            _write_png16(tmp / "depth" / f"{i:06d}.png", check_frame(i, depth))
+            n += 1
+        if n == 0:
+            raise ValueError("empty sequence: no frames")
+        if joints is not None or markers is not None:
+            (tmp / "groundtruth").mkdir()
+        if joints is not None:
+            joints = _check_points("joints", joints, n, len(JOINT_NAMES))
+            (tmp / "groundtruth" / "joints.csv").write_text(format_points_csv(joints, JOINT_NAMES, "joint"))
+        if markers is not None:
+            markers = _check_points("markers", markers, n, len(marker_names))
+            (tmp / "groundtruth" / "markers.csv").write_text(format_points_csv(markers, marker_names, "marker"))
+        (tmp / "sequence.json").write_text(json.dumps(meta, indent=1) + "\n")
+    return path
+
+
+def write_points_csv(path, points, names, kind: str) -> None:
+    """Write ``frame,<kind>,x,y,z`` rows atomically (NaN rows left out)."""
+    from .atomic import write_text_atomic
+
+    write_text_atomic(path, format_points_csv(points, names, kind))
+
+
+__all__ = ["Sequence", "open_sequence", "write_sequence", "read_points_csv", "format_points_csv",
+           "write_points_csv", "png_header", "depth_to_raw"]

@@ -1,0 +1,31 @@
+"""tools/make_body_mesh.py rebuilds a closed, skinned, loadable body (coarse grid, for speed)."""
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+pytest.importorskip("skimage")
+pytest.importorskip("fast_simplification")
+
+from depthtrack.body import BodyModel  # noqa: E402
+
+TOOL = Path(__file__).resolve().parents[1] / "tools" / "make_body_mesh.py"
+
+
+def test_tool_builds_closed_skinned_meshes(tmp_path):
+    spec = importlib.util.spec_from_file_location("make_body_mesh", TOOL)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    results = tool.build(voxel=0.015, full_faces=3000, decimated_faces=800, smooth_iterations=5,
+                         out_dir=tmp_path)
+    for label, (path, n_vertices, n_faces, size) in results.items():
+        body = BodyModel.from_gltf(path)
+        m = trimesh.Trimesh(body.mesh.vertices, body.faces, process=False)
+        assert m.is_watertight and m.volume > 0
+        assert abs(n_faces - (3000 if label == "full" else 800)) < 20
+        np.testing.assert_allclose(body.mesh.weights.sum(1), 1.0, atol=1e-6)
+        # the tool scales the full mesh to exactly 1.75 m and both levels share its skeleton
+        assert abs(np.ptp(body.mesh.vertices[:, 1]) - 1.75) < (1e-4 if label == "full" else 0.02)
+        np.testing.assert_allclose(body.offsets, BodyModel.from_gltf(results["full"][0]).offsets, atol=1e-6)

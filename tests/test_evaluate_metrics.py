@@ -1,0 +1,98 @@
+"""Error metrics against hand-computed values (NaN = unknown ground truth or estimate)."""
+import math
+
+import numpy as np
+import pytest
+
+from depthtrack.evaluate import metrics
+
+nan = np.nan
+
+
+def _pair():
+    """2 frames x 3 points; errors by construction (3-4-5 triangles and axis offsets):
+    frame 0: 0.05, 0.30, unknown truth;  frame 1: 0.10, unknown estimate, 0.02."""
+    truth = np.zeros((2, 3, 3))
+    truth[0, 2] = nan                      # ground-truth row missing
+    est = np.zeros((2, 3, 3))
+    est[0, 0] = (0.03, 0.04, 0.0)          # 0.05
+    est[0, 1] = (0.0, 0.18, 0.24)          # 0.30
+    est[1, 0] = (0.0, 0.0, -0.10)          # 0.10
+    est[1, 1] = nan                        # no estimate
+    est[1, 2] = (0.02, 0.0, 0.0)           # 0.02
+    return est, truth
+
+
+def test_point_errors_are_distances_with_nan_for_unknown():
+    est, truth = _pair()
+    err = metrics.joint_errors(est, truth)
+    expected = np.array([[0.05, 0.30, nan], [0.10, nan, 0.02]])
+    np.testing.assert_allclose(err, expected, atol=1e-12)
+
+
+def test_summary_statistics_by_hand():
+    err = metrics.joint_errors(*_pair())
+    # known: 0.05, 0.30, 0.10, 0.02
+    assert metrics.mean_error(err) == pytest.approx((0.05 + 0.30 + 0.10 + 0.02) / 4)
+    # worst per frame 0.30 and 0.10
+    assert metrics.mean_max_error(err) == pytest.approx(0.20)
+    # within 10 cm (inclusive): 0.05, 0.10, 0.02 of 4
+    assert metrics.fraction_within(err, 0.10) == pytest.approx(0.75)
+    assert metrics.fraction_within(err, 0.04) == pytest.approx(0.25)
+    np.testing.assert_allclose(metrics.per_frame_mean(err), [0.175, 0.06])
+    np.testing.assert_allclose(metrics.per_point_mean(err), [0.075, 0.30, 0.02])
+
+
+def test_frames_without_anything_known_are_left_out():
+    err = np.array([[0.2, nan], [nan, nan], [0.1, 0.3]])
+    assert metrics.mean_max_error(err) == pytest.approx((0.2 + 0.3) / 2)
+    assert np.isnan(metrics.per_frame_max(err)[1])
+    assert np.isnan(metrics.per_frame_mean(err)[1])
+    all_unknown = np.full((2, 3), nan)
+    assert math.isnan(metrics.mean_error(all_unknown))
+    assert math.isnan(metrics.mean_max_error(all_unknown))
+    assert math.isnan(metrics.fraction_within(all_unknown))
+
+
+def test_paper_marker_metrics_average_per_frame_first():
+    # frame 0 has 4 visible markers, frame 1 only one: the per-frame mean comes first,
+    # so frame 1's single marker weighs as much as frame 0's four.
+    measured = np.zeros((2, 4, 3))
+    measured[1, 1:] = nan
+    model = np.zeros((2, 4, 3))
+    model[0, :, 0] = (0.01, 0.02, 0.03, 0.06)
+    model[1, 0, 2] = 0.10
+    err = metrics.marker_errors(model, measured)
+    assert metrics.average_marker_error(err) == pytest.approx(((0.01 + 0.02 + 0.03 + 0.06) / 4 + 0.10) / 2)
+    assert metrics.max_marker_error(err) == pytest.approx((0.06 + 0.10) / 2)
+
+
+def test_fps_and_summary():
+    assert metrics.frames_per_second(50, 4.0) == 12.5
+    assert math.isnan(metrics.frames_per_second(50, None))
+    assert math.isnan(metrics.frames_per_second(50, 0.0))
+    err = metrics.joint_errors(*_pair())
+    s = metrics.summarize(err, frames=2, seconds=0.5)
+    assert list(s) == list(metrics.METRIC_KEYS)
+    assert s["fps"] == 4.0 and s["frames"] == 2
+    assert s["mean_error_m"] == pytest.approx(0.1175)
+    assert s["marker_mean_error_m"] is None and s["marker_max_error_m"] is None
+    assert metrics.summarize(err, 2)["fps"] is None
+
+
+def test_overall_is_sequence_weighted():
+    a = {"frames": 10, "fps": 2.0, "mean_error_m": 0.1, "max_error_m": 0.2, "within_10cm": 0.5,
+         "marker_mean_error_m": None, "marker_max_error_m": None}
+    b = {"frames": 30, "fps": 4.0, "mean_error_m": 0.3, "max_error_m": 0.4, "within_10cm": 1.0,
+         "marker_mean_error_m": 0.05, "marker_max_error_m": 0.09}
+    o = metrics.average_summaries([a, b])
+    assert o["frames"] == 40
+    assert o["mean_error_m"] == pytest.approx(0.2)      # not frame-weighted (0.25)
+    assert o["fps"] == pytest.approx(3.0)
+    assert o["within_10cm"] == pytest.approx(0.75)
+    assert o["marker_mean_error_m"] == pytest.approx(0.05)   # only b has markers
+
+
+def test_shape_mismatch_is_rejected():
+    with pytest.raises(ValueError):
+        metrics.point_errors(np.zeros((2, 3, 3)), np.zeros((2, 4, 3)))

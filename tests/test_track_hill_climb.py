@@ -1,0 +1,93 @@
+"""Hill climbing: the block schedule on a closed-form energy, and on rendered depth."""
+import numpy as np
+import pytest
+
+from depthtrack.motion.prior import pose_velocity
+from depthtrack.track.hill_climb import HillClimber, SearchGroup, default_blocks, restrict_blocks
+
+
+def _quadratic(target, weights):
+    def energy(poses):
+        d = pose_velocity(target, poses)
+        return np.sum(weights * d * d, axis=-1)
+    return energy
+
+
+def test_reaches_the_minimum_of_a_separable_energy_within_the_finest_step():
+    rng = np.random.default_rng(5)
+    target = np.zeros(48)
+    target[2] = 3.0
+    start = target.copy()
+    start[:3] += [0.08, -0.05, 0.1]
+    start[3:] += rng.uniform(-0.25, 0.25, 45)
+    calls = []
+
+    def energy(poses):
+        calls.append(len(poses))
+        return _quadratic(target, np.ones(48))(poses)
+
+    climber = HillClimber(levels=5, max_iterations=20)
+    res = climber.climb(start, energy)
+    d = np.abs(pose_velocity(target, res.pose))
+    finest = {g.name: g.step * 0.5 ** 4 for b in climber.blocks for g in b}
+    for block in climber.blocks:
+        for g in block:
+            assert d[list(g.params)].max() <= finest[g.name] * 1.5, g.name
+    assert res.evaluations == sum(calls) and res.calls == len(calls)
+    assert res.energy < 1e-2 * energy(start[None])[0]
+
+
+def test_limbs_of_one_block_move_together():
+    # two independent groups in one block: each iteration's improving moves are combined
+    target = np.zeros(48)
+    start = target.copy()
+    start[12] = 0.4
+    start[21] = -0.4
+    block = [[SearchGroup("l_shoulder", (12, 13, 14), 0.2), SearchGroup("r_shoulder", (21, 22, 23), 0.2)]]
+    res = HillClimber(blocks=block, levels=1, max_iterations=2).climb(start, _quadratic(target, np.ones(48)))
+    # one step for each shoulder per iteration: 2 iterations of 0.2 reach both targets
+    np.testing.assert_allclose(res.pose[[12, 21]], [0.0, 0.0], atol=1e-9)
+
+
+def test_restrict_blocks_keeps_order():
+    blocks = restrict_blocks(default_blocks(), ["l_elbow", "pelvis_t", "l_shoulder"])
+    assert [[g.name for g in b] for b in blocks] == [["pelvis_t"], ["l_shoulder"], ["l_elbow"]]
+
+
+def test_clip_keeps_candidates_inside_joint_limits():
+    lower = np.full(48, -np.inf)
+    upper = np.full(48, np.inf)
+    upper[15] = 0.1                         # the elbow may not pass 0.1
+    target = np.zeros(48)
+    target[15] = 1.0
+    res = HillClimber(levels=3, clip=lambda p: np.clip(p, lower, upper)).climb(
+        np.zeros(48), _quadratic(target, np.ones(48)))
+    assert res.pose[15] <= 0.1 + 1e-12
+
+
+@pytest.mark.slow
+def test_recovers_a_perturbed_pose_from_rendered_depth():
+    from depthtrack.body import BodyModel
+    from depthtrack.camera import Camera
+    from depthtrack.render import FrameRenderer, TileRenderer
+    from depthtrack.track.tracker import square_roi
+
+    body = BodyModel.default(1.75)
+    camera = Camera.preset("sr4000")
+    truth = body.default_pose((0.1, 0.05, 3.2))
+    truth[12:15] = [-0.5, 0.0, 0.5]
+    truth[15] = -0.7
+    truth[30] = -0.4
+    truth[33] = 0.6
+    depth = FrameRenderer(camera).render(body, truth)
+    tiles = TileRenderer(body.with_mesh("decimated"), camera, tile=64)
+    observed = np.where(depth > 0, depth, np.inf).astype(np.float32)
+    tiles.set_observation(observed, roi=square_roi(depth > 0, 0.15))
+    start = truth.copy()
+    start[:3] += [0.05, -0.04, 0.06]
+    start[3:] += np.random.default_rng(2).uniform(-0.2, 0.2, 45)
+    res = HillClimber(clip=body.clip, levels=4).climb(start, lambda p: tiles.costs(p), passes=2)
+    err = np.linalg.norm(body.joint_positions(res.pose) - body.joint_positions(truth), axis=1)
+    err0 = np.linalg.norm(body.joint_positions(start) - body.joint_positions(truth), axis=1)
+    assert err.mean() < 0.04 < err0.mean()
+    assert err.max() < 0.10

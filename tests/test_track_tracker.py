@@ -1,0 +1,127 @@
+"""The tracker end to end on rendered frames: automatic start, tracking, EP recovery, the CLI."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.camera import Camera
+from depthtrack.track.evidence import PartModel
+from depthtrack.track.tracker import Tracker, TrackerSettings, fit_pose_to_joints
+
+REPO = Path(__file__).resolve().parents[1]
+CAMERA = Camera.preset("sr4000")
+
+
+def _segment(depth, camera):
+    """Foreground of a frame rendered without scenery: every pixel with a reading."""
+    mask = depth > 0
+    return SimpleNamespace(mask=mask, points=camera.backproject(depth)[mask], floor_plane=None)
+
+
+def _motion(n, fps=25.0):
+    """A slow wave: arms, elbows, a step and a turn of the pelvis."""
+    t = np.arange(n) / fps
+    poses = np.zeros((n, 48))
+    poses[:, 0] = 0.1 * np.sin(t)
+    poses[:, 2] = 3.2
+    poses[:, 4] = 0.3 * np.sin(0.8 * t)                  # pelvis ry
+    poses[:, 14] = -0.5 - 0.5 * np.sin(2.0 * t)          # l_shoulder rz: raise sideways
+    poses[:, 23] = 0.4 + 0.3 * np.sin(1.5 * t)           # r_shoulder rz
+    poses[:, 15] = -0.6 - 0.4 * np.sin(2.0 * t)          # l_elbow flexion
+    poses[:, 30] = -0.3 * np.sin(2.0 * t)                # l_hip rx
+    poses[:, 33] = 0.3 + 0.3 * np.sin(2.0 * t)           # l_knee rx
+    return poses
+
+
+@pytest.fixture(scope="module")
+def scene():
+    from depthtrack.render import FrameRenderer
+
+    body = BodyModel.default(1.75)
+    poses = _motion(10)
+    renderer = FrameRenderer(CAMERA)
+    rng = np.random.default_rng(0)
+    frames = []
+    for p in poses:
+        d = renderer.render(body, p)
+        frames.append((d + (d > 0) * rng.normal(scale=0.01, size=d.shape)).astype(np.float32))
+    return body, poses, frames
+
+
+def _errors(body, poses, truth):
+    return np.linalg.norm(body.joint_positions(np.asarray(poses)) - body.joint_positions(truth), axis=-1)
+
+
+def test_automatic_start_and_tracking_recover_the_joints(scene):
+    body, truth, frames = scene
+    tracker = Tracker(body, CAMERA, method="hc", segmenter=_segment)
+    out = [tracker.init(frames[0])]
+    out += [tracker.step(d) for d in frames[1:]]
+    err = _errors(body, out, truth)
+    assert tracker.init_info["mode"] == "automatic"
+    assert err[0].mean() < 0.05
+    assert err.mean() < 0.05
+    assert (err < 0.10).mean() > 0.95
+    assert tracker.counts["recoveries"] == 0
+
+
+def test_evidence_propagation_recovers_a_lost_arm_that_hill_climbing_does_not(scene):
+    body, truth, frames = scene
+    parts = PartModel.from_body(body)
+    # a detector that reports the true left hand (and nothing else) on every frame
+    frame_index = {"i": 0}
+
+    def detector(depth, camera, foreground):
+        hand = parts.positions(body, truth[frame_index["i"]][None])[0, parts.index("l_hand")]
+        return [SimpleNamespace(label="hand", position=hand, direction=np.zeros(3), score=1.0)]
+
+    lost = truth[0].copy()
+    lost[12:15] = [0.0, 0.0, 0.0]                          # left arm hanging instead of raised
+    lost[15] = 0.0
+    results = {}
+    for method in ("hc", "hc+ep"):
+        tracker = Tracker(body, CAMERA, method=method, segmenter=_segment, detector=detector,
+                          settings=TrackerSettings(lost_ratio=1e9))
+        frame_index["i"] = 0
+        tracker.init(frames[0], pose=lost)
+        out = []
+        for i in range(1, 4):
+            frame_index["i"] = i
+            out.append(tracker.step(frames[i]))
+        wrist = _errors(body, out, truth[1:4])[:, 5]
+        results[method] = (wrist, tracker.counts["accepted"])
+    # EP puts the hand back on the first frame; HC alone is still 10+ cm off there
+    assert results["hc+ep"][1] >= 1
+    assert results["hc+ep"][0][0] < 0.06
+    assert results["hc"][0][0] > 0.10
+
+
+def test_fit_pose_to_joints_reproduces_a_pose(scene):
+    body, truth, _ = scene
+    fitted = fit_pose_to_joints(body, body.joint_positions(truth[5]))
+    assert _errors(body, fitted[None], truth[5][None]).max() < 0.01
+
+
+def test_bad_input_is_one_line_and_exit_2(tmp_path):
+    out = tmp_path / "out"
+    res = subprocess.run([sys.executable, "-m", "depthtrack", "track", str(tmp_path / "missing"),
+                          "-o", str(out)], capture_output=True, text=True, cwd=REPO)
+    assert res.returncode == 2
+    assert res.stderr.count("\n") == 1 and res.stderr.startswith("depthtrack track: ")
+    assert not out.exists()
+    # a non-track directory is never overwritten
+    keep = tmp_path / "keep"
+    keep.mkdir()
+    (keep / "precious.txt").write_text("x")
+    res = subprocess.run([sys.executable, "-m", "depthtrack", "track", str(tmp_path / "missing"),
+                          "-o", str(keep)], capture_output=True, text=True, cwd=REPO)
+    assert res.returncode == 2 and (keep / "precious.txt").exists()
+    res = subprocess.run([sys.executable, "-m", "depthtrack", "track", str(tmp_path / "missing"),
+                          "-o", str(out), "--overlay", str(tmp_path / "x.avi")],
+                         capture_output=True, text=True, cwd=REPO)
+    assert res.returncode == 2 and "mp4 or .gif" in res.stderr

@@ -1,0 +1,117 @@
+#!/usr/bin/env python
+"""Measure the tracker's acceleration prior from motion capture; write depthtrack/data/motion_prior.json.
+
+Usage::
+
+    .venv/bin/python tools/make_motion_prior.py [BVH or DIR ...] [-o depthtrack/data/motion_prior.json]
+        [--analysis-fps 30]
+
+Default inputs: every ``*.bvh`` under ``../shared/data`` (the DeepMimic clips and the CMU
+back stroke). Each clip is read with :func:`depthtrack.io.bvh.read_bvh`, retargeted onto
+the default body (:func:`depthtrack.motion.retarget.retarget`), resampled to the analysis
+rate (rotations slerped; a leading T-pose calibration frame is dropped), and its relative velocities ``v_t`` (see
+:mod:`depthtrack.motion.prior`) differenced: ``alpha = (v_t - v_{t-1}) * fps^2``.
+Per pose parameter the file stores the root mean square of ``alpha`` pooled over every
+frame of every clip (the maximum-likelihood standard deviation of a zero-mean Gaussian)
+and its 95th percentile of ``|alpha|``, in m/s^2 (pelvis translation) or rad/s^2.
+
+The default analysis rate, 30 Hz, is the native rate of most clips and divides the 60
+and 120 Hz ones exactly, so no clip is interpolated between its samples.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from depthtrack.body.model import BodyModel  # noqa: E402
+from depthtrack.io.atomic import write_text_atomic  # noqa: E402
+from depthtrack.io.bvh import read_bvh  # noqa: E402
+from depthtrack.motion.prior import accelerations_of, velocities_of  # noqa: E402
+from depthtrack.motion.retarget import resample_poses, retarget  # noqa: E402
+
+#: Floor on a stored deviation, so a parameter that never moves in the data keeps a usable prior.
+MIN_ACCEL_STD = 1.0
+
+
+def leading_reference_frames(poses, factor=10.0):
+    """How many leading frames are a calibration pose (CMU files often start in a T-pose).
+
+    Frame 0 is dropped when the step from it to frame 1 is ``factor`` times the median step of
+    the clip (a jump no body makes in one frame); ``poses (F, 48) -> int``.
+    """
+    steps = np.linalg.norm(velocities_of(poses)[:, 3:], axis=1)
+    if len(steps) > 2 and steps[0] > factor * np.median(steps[1:]):
+        return 1
+    return 0
+
+
+def clip_accelerations(path, body, analysis_fps):
+    """(K, 48) accelerations of one BVH clip at ``analysis_fps``, and a description of it."""
+    motion = read_bvh(path)
+    poses = retarget(motion, body)
+    dropped = leading_reference_frames(poses)
+    poses = resample_poses(poses[dropped:], motion.fps, analysis_fps)
+    acc = accelerations_of(poses, analysis_fps)
+    info = {"file": Path(path).name, "source_fps": round(motion.fps, 3), "frames": int(len(poses)),
+            "units_m": motion.units_m, "units_source": motion.units_source,
+            "dropped_leading_frames": int(dropped)}
+    return acc, info
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("inputs", nargs="*", help="BVH files or directories (default ../shared/data)")
+    parser.add_argument("-o", "--output", default=str(REPO / "depthtrack" / "data" / "motion_prior.json"))
+    parser.add_argument("--analysis-fps", type=float, default=30.0)
+    args = parser.parse_args(argv)
+
+    inputs = args.inputs or [str(REPO.parent / "shared" / "data")]
+    files = []
+    for item in inputs:
+        p = Path(item)
+        files += sorted(p.rglob("*.bvh")) if p.is_dir() else [p]
+    if not files:
+        print("make_motion_prior: no BVH files found", file=sys.stderr)
+        return 2
+    body = BodyModel.default()
+    accs, clips = [], []
+    for f in files:
+        acc, info = clip_accelerations(f, body, args.analysis_fps)
+        accs.append(acc)
+        clips.append(info)
+        print(f"{f.name}: {info['frames']} frames at {args.analysis_fps:g} Hz "
+              f"(source {info['source_fps']} Hz, units {info['units_m']:.5f} m)")
+    all_acc = np.concatenate(accs)
+    rms = np.sqrt(np.mean(all_acc ** 2, axis=0))
+    p95 = np.percentile(np.abs(all_acc), 95, axis=0)
+    names = list(body.pose_names)
+    data = {
+        "format": "depthtrack-motion-prior/1",
+        "made_by": "tools/make_motion_prior.py",
+        "statistic": "accel_std = RMS of (v_t - v_{t-1}) * fps^2 over all frames of all clips "
+                     f"(floored at {MIN_ACCEL_STD}); accel_p95 = 95th percentile of its magnitude",
+        "units": "pelvis_t*: m/s^2; rotations: rad/s^2 (relative, local-frame velocities)",
+        "scaling": "per-frame velocity-change std = accel_std / fps^2 (see depthtrack.motion.prior)",
+        "analysis_fps": args.analysis_fps,
+        "clips": clips,
+        "samples": int(len(all_acc)),
+        "pose_names": names,
+        "accel_std": {n: round(float(max(v, MIN_ACCEL_STD)), 4) for n, v in zip(names, rms)},
+        "accel_p95": {n: round(float(v), 4) for n, v in zip(names, p95)},
+    }
+    write_text_atomic(args.output, json.dumps(data, indent=1) + "\n")
+    print(f"wrote {args.output} from {len(clips)} clips, {len(all_acc)} samples")
+    for n, v in zip(names, rms):
+        print(f"  {n:14s} {v:9.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
