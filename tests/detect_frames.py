@@ -42,7 +42,7 @@ POSES = {
 @lru_cache(maxsize=None)
 def frame(name, noisy=False, roll_deg=0.0, seed=0):
     """SceneFrame of a named pose in a room (floor + back wall), SR4000 camera."""
-    from depthtrack.detect.scenes import render_scene_frames
+    from depthtrack.synth.part_scenes import render_scene_frames
     from depthtrack.synth.noise import ToFNoise
 
     noise = ToFNoise.for_camera("sr4000") if noisy else None

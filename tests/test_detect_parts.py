@@ -6,7 +6,7 @@ from depthtrack.camera import Camera
 from depthtrack.detect import detect_parts, geodesic_extrema, segment_foreground
 from depthtrack.detect.classifier import (DEFAULT_PATH, FEATURE_NAMES, PATCH_CELLS, PartClassifier,
                                           default_classifier, extremum_features)
-from depthtrack.detect.scenes import extremum_truth
+from depthtrack.synth.part_scenes import extremum_truth
 from depthtrack.detect.segment import Foreground
 from depthtrack.errors import InputError
 
@@ -77,7 +77,7 @@ def test_shipped_classifier_labels_fresh_frames():
     model = default_classifier()
     if model is None:
         pytest.skip(f"{DEFAULT_PATH} not trained yet")
-    from depthtrack.detect.scenes import render_scene_frames
+    from depthtrack.synth.part_scenes import render_scene_frames
     from depthtrack.synth.noise import ToFNoise
 
     body, cam = F.body(), F.camera()

@@ -65,7 +65,7 @@ def test_fit_floor_on_exact_plane_is_exact_and_rejects_walls():
 
 
 def test_person_without_scenery_is_every_reading():
-    from depthtrack.detect.scenes import render_scene_frames
+    from depthtrack.synth.part_scenes import render_scene_frames
 
     f = render_scene_frames(F.body(), F.pose()[None], F.camera(), scenery=False)[0]
     fg = segment_foreground(f.depth, F.camera())

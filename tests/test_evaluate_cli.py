@@ -12,7 +12,7 @@ from depthtrack.evaluate import report
 from depthtrack.evaluate.runs import evaluate
 from depthtrack.io.sequence import write_sequence
 from depthtrack.io.track_output import write_track
-from depthtrack.synth.markers import MARKER_NAMES, marker_positions
+from depthtrack.body.markers import MARKER_NAMES, marker_positions
 
 FRAMES = 5
 METRIC_KEYS = {"frames", "fps", "mean_error_m", "max_error_m", "within_10cm",

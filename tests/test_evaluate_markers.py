@@ -3,7 +3,7 @@ import numpy as np
 
 from depthtrack.body import BodyModel
 from depthtrack.evaluate.markers import known_marker_names, marker_positions
-from depthtrack.synth.markers import MARKER_NAMES, marker_vertices
+from depthtrack.body.markers import MARKER_NAMES, marker_vertices
 
 
 def test_marker_positions_are_the_posed_marker_vertices():

@@ -7,7 +7,7 @@ import pytest
 from depthtrack.body import BodyModel
 from depthtrack.contract import JOINT_INDEX as C
 from depthtrack.io.sequence import open_sequence
-from depthtrack.synth.markers import MARKER_NAMES, marker_vertices, vertex_normals
+from depthtrack.body.markers import MARKER_NAMES, marker_vertices, vertex_normals
 from depthtrack.synth.noise import ToFNoise
 from depthtrack.synth.procedural import PROCEDURAL_MOTIONS, procedural_motion
 from depthtrack.synth.scene import place_camera, transform_poses

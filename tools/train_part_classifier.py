@@ -12,7 +12,7 @@ Training data are synthetic depth frames made the way ``depthtrack synth`` makes
 seen from random directions, distances, camera heights and rolls, with bodies of
 different heights. Every geodesic extremum that :func:`depthtrack.detect.geodesic_extrema`
 finds on the segmented person (:func:`depthtrack.detect.segment_foreground`) is labelled
-from the renderer's bone-label image (:func:`depthtrack.detect.scenes.extremum_truth`).
+from the renderer's bone-label image (:func:`depthtrack.synth.part_scenes.extremum_truth`).
 
 Held-out evaluation is by *motion*: the test frames come from motions never used in
 training (``punch.bvh`` and ``jump.bvh``; ``turn`` when the mocap folder is absent). The
@@ -44,7 +44,7 @@ from depthtrack.camera import Camera  # noqa: E402
 from depthtrack.detect.classifier import CLASSES, DEFAULT_PATH, FEATURE_NAMES, PartClassifier, \
     extremum_features  # noqa: E402
 from depthtrack.detect.geodesic import geodesic_extrema  # noqa: E402
-from depthtrack.detect.scenes import extremum_truth, render_scene_frames  # noqa: E402
+from depthtrack.synth.part_scenes import extremum_truth, render_scene_frames  # noqa: E402
 from depthtrack.detect.segment import segment_foreground  # noqa: E402
 from depthtrack.progress import Progress  # noqa: E402
 from depthtrack.synth.noise import ToFNoise  # noqa: E402

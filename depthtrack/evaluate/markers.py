@@ -1,7 +1,7 @@
 """Model markers: the motion-capture markers' places on the fitted surface mesh.
 
 The marker set (Plug-in Gait names, one fixed mesh vertex each) is defined once, in
-:mod:`depthtrack.synth.markers`, where the synthesizer places the "measured" markers;
+:mod:`depthtrack.body.markers`, where the synthesizer places the "measured" markers;
 here the same vertices are read off the tracked body so the paper's marker errors
 compare like with like.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..body import linear_blend_skinning
-from ..synth.markers import MARKER_NAMES, marker_vertices
+from ..body.markers import MARKER_NAMES, marker_vertices
 
 
 def known_marker_names(names) -> list:

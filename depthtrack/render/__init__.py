@@ -13,7 +13,7 @@
 * :func:`~depthtrack.render.tiles_figure.write_tiles_figure` -- PNG mosaic of tiles + costs.
 * :func:`~depthtrack.render.raycast.raycast_depth` -- the CPU ray-cast reference.
 
-Shaders live in ``shaders/`` at the repository root.
+Shaders live in ``depthtrack/shaders/`` (package data).
 """
 from .context import GLUnavailableError, gl_context, gl_renderer
 from .frame import FrameRenderer

@@ -13,8 +13,8 @@ import os
 import re
 from pathlib import Path
 
-#: Where the GLSL sources live (``shaders/`` at the repository root).
-SHADER_DIR = Path(__file__).resolve().parents[2] / "shaders"
+#: Where the GLSL sources live (``depthtrack/shaders/``, package data so that wheels carry them).
+SHADER_DIR = Path(__file__).resolve().parents[1] / "shaders"
 
 #: What to tell the user when headless OpenGL cannot be had.
 EGL_HINT = "install Mesa EGL: apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri"

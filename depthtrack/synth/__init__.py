@@ -1,6 +1,6 @@
 """Synthetic time-of-flight depth sequences with ground truth, from mocap or built-in motions."""
 from .generate import synthesize, synthesize_bvh, synthesize_procedural
-from .markers import MARKER_NAMES, marker_positions, marker_vertices
+from ..body.markers import MARKER_NAMES, marker_positions, marker_vertices
 from .noise import ToFNoise, apply_tof_noise
 from .procedural import PROCEDURAL_MOTIONS, procedural_motion
 

@@ -4,7 +4,7 @@ Pipeline (:func:`synthesize`): world-frame poses -> camera placement and scene
 (:mod:`depthtrack.synth.scene`) -> GL depth render of body + floor + back wall
 (:class:`depthtrack.render.FrameRenderer`) -> ToF noise (:mod:`depthtrack.synth.noise`)
 -> ``write_sequence`` with the 15 contract joints and the Plug-in Gait markers
-(:mod:`depthtrack.synth.markers`) as ground truth, and every setting under
+(:mod:`depthtrack.body.markers`) as ground truth, and every setting under
 ``sequence.json["synth"]``.
 
 Sources: a BVH file (:func:`synthesize_bvh`, retargeted onto the default body and
@@ -20,7 +20,7 @@ from ..camera import Camera
 from ..contract import JOINT_NAMES
 from ..errors import InputError
 from ..progress import Progress
-from .markers import MARKER_NAMES, marker_vertices
+from ..body.markers import MARKER_NAMES, marker_vertices
 from .noise import noise_from_name
 from .scene import place_camera, scene_meshes, transform_poses
 

@@ -90,7 +90,7 @@ def render_scene_frames(body, world_poses, camera, renderer=None, noise=None, rn
     list of SceneFrame
     """
     from ..render import FrameRenderer
-    from ..synth.scene import place_camera, scene_meshes, transform_poses
+    from .scene import place_camera, scene_meshes, transform_poses
 
     world_poses = np.atleast_2d(np.asarray(world_poses, dtype=float))
     renderer = FrameRenderer(camera) if renderer is None else renderer
