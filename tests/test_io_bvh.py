@@ -308,3 +308,27 @@ def test_write_bvh_round_trip(tmp_path):
     write_bvh(path, body, np.zeros((1, body.dof)), fps=25)
     rest = read_bvh(path).contract_joint_positions()[0]
     assert rest[JOINT_INDEX["head"], 1] > rest[JOINT_INDEX["l_ankle"], 1] + 1.4
+
+
+def _walking_bvh(tmp_path, rows):
+    """SMALL's skeleton with the given root rows (x y z rz ry rx lz ly lx), 30 fps, metres."""
+    head = SMALL.split("MOTION")[0]
+    text = head + f"MOTION\nFrames: {len(rows)}\nFrame Time: {1 / 30}\n"
+    text += "\n".join(" ".join(f"{v:g}" for v in r) for r in rows) + "\n"
+    path = tmp_path / "m.bvh"
+    path.write_text(text)
+    return read_bvh(path, units="m")
+
+
+def test_leading_jump_finds_a_calibration_frame(tmp_path):
+    # frame 0 stands elsewhere in another pose (a calibration T-pose), then a smooth walk at 1.5 m/s
+    walk = [[0.05 * i, 1.0, 0.0, 0, 0, 0, 10, 0, 0] for i in range(1, 40)]
+    motion = _walking_bvh(tmp_path, [[3.0, 1.0, 2.0, 0, 0, 0, 90, 0, 0]] + walk)
+    assert motion.leading_jump() == 1
+    assert _walking_bvh(tmp_path, walk).leading_jump() == 0
+
+
+def test_leading_jump_ignores_fast_motion_later(tmp_path):
+    # a jump 2 s into the motion is not a leading calibration frame
+    rows = [[0.05 * i + (2.0 if i >= 60 else 0.0), 1.0, 0.0, 0, 0, 0, 10, 0, 0] for i in range(90)]
+    assert _walking_bvh(tmp_path, rows).leading_jump() == 0

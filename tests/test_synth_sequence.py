@@ -146,3 +146,16 @@ def test_procedural_motions_keep_feet_down_and_move(name, body):
     motion = np.linalg.norm(joints - joints[:1], axis=-1).max()
     assert motion > 0.3
     assert np.all(np.diff(poses, axis=0)[:, 3:].max() < 0.5)          # smooth: small steps at 10 fps
+
+
+def test_camera_sees_a_lying_subject_from_its_side():
+    from depthtrack.body.rotations import matrix_to_rotvec, rotation_about
+    from depthtrack.synth.scene import initial_heading
+
+    pose = np.zeros((1, 48))
+    pose[0, 3:6] = matrix_to_rotvec(rotation_about(np.array([1.0, 0.0, 0.0]), np.radians(-90))[None])[0]
+    np.testing.assert_allclose(initial_heading(pose), [1.0, 0.0, 0.0], atol=1e-9)   # supine: its left side
+    turned = np.zeros((1, 48))
+    turned[0, 3:6] = [0.0, np.pi / 2, 0.0]      # upright, turned 90 degrees about the vertical
+    h = initial_heading(turned)
+    assert abs(h[1]) < 1e-9 and abs(abs(h[0]) - 1.0) < 1e-9

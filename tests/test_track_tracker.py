@@ -125,3 +125,25 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path):
                           "-o", str(out), "--overlay", str(tmp_path / "x.avi")],
                          capture_output=True, text=True, cwd=REPO)
     assert res.returncode == 2 and "mp4 or .gif" in res.stderr
+
+
+def test_out_of_range_marks_open_space_but_not_dropouts():
+    from depthtrack.track.tracker import observation_image, out_of_range
+
+    depth = np.full((144, 176), 3.0, np.float32)
+    depth[:, 120:] = 0.0                       # the room beyond the sensor's range on the right
+    mask = np.zeros(depth.shape, bool)
+    mask[40:110, 60:90] = True                 # the person
+    depth[mask] = 2.0
+    depth[70, 75] = 0.0                        # a dropout on the person
+    depth[20, 20] = 0.0                        # a dropout on the wall
+    depth[50:60, 90:92] = 0.0                  # no reading right beside the person (e.g. dark sleeve)
+    open_space = out_of_range(depth, mask)
+    assert open_space[:, 125:].all()
+    assert not open_space[70, 75] and not open_space[20, 20]
+    assert not open_space[50:60, 90:92].any()
+    assert not open_space[:, :120].any()
+    from depthtrack.camera import Camera
+    obs = observation_image(depth, mask, Camera.preset("sr4000"))
+    assert np.isinf(obs[:, 125:]).all()        # background: a limb drawn there pays the silhouette cost
+    assert obs[70, 75] == 0 and obs[20, 20] == 0

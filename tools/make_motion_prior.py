@@ -40,23 +40,11 @@ from depthtrack.motion.retarget import resample_poses, retarget  # noqa: E402
 MIN_ACCEL_STD = 1.0
 
 
-def leading_reference_frames(poses, factor=10.0):
-    """How many leading frames are a calibration pose (CMU files often start in a T-pose).
-
-    Frame 0 is dropped when the step from it to frame 1 is ``factor`` times the median step of
-    the clip (a jump no body makes in one frame); ``poses (F, 48) -> int``.
-    """
-    steps = np.linalg.norm(velocities_of(poses)[:, 3:], axis=1)
-    if len(steps) > 2 and steps[0] > factor * np.median(steps[1:]):
-        return 1
-    return 0
-
-
 def clip_accelerations(path, body, analysis_fps):
     """(K, 48) accelerations of one BVH clip at ``analysis_fps``, and a description of it."""
     motion = read_bvh(path)
     poses = retarget(motion, body)
-    dropped = leading_reference_frames(poses)
+    dropped = motion.leading_jump()
     poses = resample_poses(poses[dropped:], motion.fps, analysis_fps)
     acc = accelerations_of(poses, analysis_fps)
     info = {"file": Path(path).name, "source_fps": round(motion.fps, 3), "frames": int(len(poses)),

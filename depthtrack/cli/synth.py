@@ -47,6 +47,9 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="noise random seed (default 0)")
     p.add_argument("--units", default=None,
                    help="BVH units: metres per unit or cmu, m, cm, mm, inch (default: inferred, reported)")
+    p.add_argument("--keep-leading-jump", action="store_true",
+                   help="keep the frames a BVH motion teleports out of at its start (by default "
+                        "they are dropped: CMU files open with a calibration T-pose)")
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
     p.set_defaults(func=run)
 
@@ -77,7 +80,8 @@ def run(args) -> int:
     if args.procedural:
         synth = synthesize_procedural(args.procedural, out, **common)
     else:
-        synth = synthesize_bvh(motion, out, units=args.units, **common)
+        synth = synthesize_bvh(motion, out, units=args.units,
+                               skip_leading_jump=not args.keep_leading_jump, **common)
     if not args.quiet:
         place = synth["placement"]
         source = synth["source"]
@@ -85,4 +89,7 @@ def run(args) -> int:
         print(f"wrote {out}: camera {synth['camera_preset']} at {place['distance_m']:.2f} m, "
               f"{place['frames_in_view'] * 100:.0f}% of frames fully in view, noise "
               f"{synth['noise']['model']}, {time.perf_counter() - t0:.1f} s{units}")
+        if source.get("skipped_leading_frames"):
+            print(f"dropped the first {source['skipped_leading_frames']} BVH frame(s): "
+                  f"{source['skipped_because']} (--keep-leading-jump keeps them)")
     return 0

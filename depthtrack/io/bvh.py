@@ -337,6 +337,22 @@ class BvhMotion:
                 out[:, c] = ends[:, args[0]]
         return out
 
+    def leading_jump(self, max_speed: float = 20.0, within_s: float = 1.0) -> int:
+        """Frames to drop at the start because the motion teleports out of them.
+
+        Many CMU conversions open with a calibration pose (a T-pose, here standing) that
+        the next frame leaves in one step; no body moves a joint faster than ``max_speed``
+        m/s (a punching hand peaks near 10). Returns the index of the first frame after the
+        last such jump within the first ``within_s`` seconds, or 0 when there is none.
+        """
+        pos = self.joint_positions()
+        last = min(self.n_frames - 1, int(round(within_s * self.fps)))
+        if last < 1:
+            return 0
+        step = np.linalg.norm(np.diff(pos[:last + 1], axis=0), axis=2).max(axis=1)   # (last,)
+        jumps = np.flatnonzero(step * self.fps > max_speed)
+        return int(jumps[-1] + 1) if len(jumps) else 0
+
 
 # ---------------------------------------------------------------------- reading
 class _Tokens:

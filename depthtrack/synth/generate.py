@@ -139,11 +139,14 @@ def _window(poses, fps, start, seconds, path=None):
 
 def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                    distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0, units=None,
-                   camera_height=None, quiet=True, body=None) -> dict:
+                   camera_height=None, quiet=True, body=None, skip_leading_jump=True) -> dict:
     """Synthesize a sequence from a BVH file (see :func:`synthesize`).
 
     The motion is retargeted onto the default body of the given height (full mesh),
-    resampled to ``fps`` by slerp, cut to ``[start, start + seconds)``.
+    resampled to ``fps`` by slerp, cut to ``[start, start + seconds)``. With
+    ``skip_leading_jump``, frames the motion teleports out of at its start
+    (:meth:`BvhMotion.leading_jump`, e.g. CMU's calibration T-pose) are dropped first and
+    ``start`` counts from the frame after them; ``sequence.json`` records how many.
     """
     from ..body import BodyModel
     from ..io.bvh import read_bvh
@@ -155,13 +158,19 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
     to_world[:3, :3] = canonical_axes(motion)     # BVH world -> y-down world facing like the rest pose
     scale = float(body.height) / subject_height(motion, body)
     poses = retarget(motion, body, world_to_camera=to_world, scale=scale)
-    duration = (motion.n_frames - 1) * motion.frame_time
+    skipped = motion.leading_jump() if skip_leading_jump else 0
+    poses = poses[skipped:]
+    duration = (len(poses) - 1) * motion.frame_time
     if not 0.0 <= start <= duration:
         raise InputError(motion_path, f"--start {start} s is outside the motion (0 to {duration:.2f} s)")
     poses = resample_poses(poses, motion.fps, fps, start=start, duration=seconds)
     source = {"kind": "bvh", "file": os.path.basename(os.fspath(motion_path)),
               "units_m": motion.units_m, "units_source": motion.units_source,
-              "frames": motion.n_frames, "fps": round(motion.fps, 6), "start_s": start,
+              "frames": motion.n_frames, "fps": round(motion.fps, 6),
+              "skipped_leading_frames": skipped,
+              "skipped_because": ("the motion jumps out of them faster than a body moves "
+                                  "(a calibration pose)") if skipped else None,
+              "start_s": start,
               "seconds": None if seconds is None else float(seconds),
               "retarget": {"method": "bone directions, twist from BVH, hip centre follows BVH",
                            "root_scale": round(scale, 6)}}

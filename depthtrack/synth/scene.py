@@ -2,7 +2,8 @@
 
 Poses arrive in a *world* frame with our model's axes (y down, so "up" is -y) and
 a horizontal floor ``y = floor_y``. The camera stands in front of the subject's
-initial heading (turned by ``azimuth`` about the vertical), at about chest height,
+initial heading (:func:`initial_heading`: its left side when it lies; turned by
+``azimuth`` about the vertical), at about chest height,
 looking slightly down at the middle of the body; the distance grows until the
 whole body stays in view in every frame unless the caller fixes it.
 """
@@ -37,8 +38,17 @@ def transform_poses(poses, world_to_camera) -> np.ndarray:
 
 
 def initial_heading(poses) -> np.ndarray:
-    """(3,) unit horizontal direction the subject faces in the first frame (world frame)."""
-    forward = rotvec_to_matrix(np.asarray(poses, float)[0, 3:6]) @ np.array([0.0, 0.0, -1.0])
+    """(3,) unit horizontal direction the camera looks at the subject from (world frame).
+
+    The direction the subject faces in the first frame; when the subject lies (faces the
+    ceiling or the floor, so its facing direction is nearly vertical) the direction its
+    left side faces instead, so a lying body is seen from the side, as a swimmer is filmed,
+    rather than end-on along its length.
+    """
+    R = rotvec_to_matrix(np.asarray(poses, float)[0, 3:6])
+    forward = R @ np.array([0.0, 0.0, -1.0])
+    if abs(forward[1]) > 0.7:
+        forward = R @ np.array([1.0, 0.0, 0.0])
     forward[1] = 0.0
     n = np.linalg.norm(forward)
     return forward / n if n > 1e-6 else np.array([0.0, 0.0, -1.0])

@@ -131,11 +131,11 @@ class TrackerSettings:
 
     tile: int = 64
     fine_tile: int = 128
-    fine_iterations: int = 2
+    fine_iterations: int = 4
     levels: int = 3
-    max_iterations: int = 6
+    max_iterations: int = 8
     step_scale: float = 1.0
-    passes: int = 1
+    passes: int = 2
     diagonals: bool = False
     damping: float = 0.7
     likelihood_weight: float = 1.0
@@ -193,6 +193,27 @@ def square_roi(mask, margin: float, min_size: int = 16):
     return (cu - 0.5 * (size - 1), cv - 0.5 * (size - 1), size)
 
 
+def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
+    """No-reading pixels that are open space rather than missing readings: ``(H, W) bool``.
+
+    A ToF camera returns no reading both where the signal was lost on a surface (isolated
+    dropouts, dark or grazing patches of the person) and where nothing lies within its
+    range (the open background of a room deeper than the camera's range). The latter is
+    evidence that no body is there; left neutral, a limb could hide in it for free. A
+    no-reading pixel counts as open space when it lies more than ``clearance`` pixels from
+    the segmented person ``mask (H, W) bool`` and belongs to a 4-connected no-reading
+    region of at least ``min_area`` of the image (dropouts are specks, open space is not).
+    """
+    zero = ~(np.asarray(depth) > 0)
+    k = 2 * int(clearance) + 1
+    away = cv2.dilate(np.asarray(mask, np.uint8), np.ones((k, k), np.uint8)) == 0
+    candidates = (zero & away).astype(np.uint8)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(candidates, connectivity=4)
+    big = stats[:, cv2.CC_STAT_AREA] >= min_area * zero.size
+    big[0] = False
+    return big[labels]
+
+
 def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=None):
     """The depth image the likelihood compares against: person pixels raw, background marked.
 
@@ -216,6 +237,7 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
     -------
     (H, W) float32
         Raw depth where the person may be, ``inf`` (background) elsewhere, 0 = no reading.
+        No-reading pixels of open space (:func:`out_of_range`) are background too.
     """
     depth = np.asarray(depth, dtype=np.float64)
     reading = depth > 0
@@ -232,6 +254,7 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
     if near is not None:
         background |= ~np.asarray(near, bool)
     background &= reading & ~np.asarray(mask, bool)
+    background |= out_of_range(depth, mask)
     out = np.where(background, np.inf, np.where(reading, depth, 0.0))
     return out.astype(np.float32)
 
