@@ -38,4 +38,4 @@ benchmark: $(STAMP)
 	DEPTHTRACK=$(VENV)/bin/depthtrack tools/benchmark.sh ../shared/data benchmark-output
 
 clean:
-	rm -rf $(VENV) demo-output benchmark-output
+	rm -rf $(VENV) demo-output benchmark-output swim-report

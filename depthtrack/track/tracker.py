@@ -120,6 +120,10 @@ class TrackerSettings:
         centred on a track that may be lost, would pull the hypothesis back before the
         likelihood could judge it (measured on ``make benchmark``: 92 % of joints within
         10 cm on punch/run/walk/jump without it, 91 % with it).
+    refine_scope : {"chain", "body"}
+        What that hill climbing moves: the corresponded part's chain (:data:`PART_GROUPS`,
+        the paper's local search) or every joint (about three times the candidates; on
+        ``make benchmark``'s clips no better on average).
     accept : {"likelihood", "map"}
         What a propagated-and-refined pose must improve to replace the best one: the
         likelihood (the paper) or the MAP energy (likelihood + motion prior).
@@ -157,6 +161,7 @@ class TrackerSettings:
     pose_prior_std: float = 1.0
     refine_level: int = 1
     refine_with_prior: bool = False
+    refine_scope: str = "chain"
     accept: str = "likelihood"
     accept_margin: float = 0.0
     init_passes: int = 3
@@ -368,6 +373,8 @@ class Tracker:
         if detector is None and method != "hc":
             from ..detect import detect_parts as detector
         self.detector = detector
+        if s.refine_scope not in ("chain", "body"):
+            raise InputError(None, f"refine_scope must be 'chain' or 'body', not {s.refine_scope!r}")
         self.parts = PartModel.from_body(body)
         step_scale = s.step_scale * 25.0 / self.fps
         self.climber = HillClimber(blocks=default_blocks(step_scale, s.diagonals), levels=s.levels,
@@ -530,7 +537,8 @@ class Tracker:
         likelihood improves (the prior, centred on a possibly lost previous pose, would veto
         exactly the jumps evidence propagation exists for)."""
         if self.method != "ep":
-            blocks = restrict_blocks(self.climber.blocks, PART_GROUPS[part])
+            blocks = (restrict_blocks(self.climber.blocks, PART_GROUPS[part])
+                      if self.settings.refine_scope == "chain" else None)
             use_prior = self._use_prior
             self._use_prior = use_prior and self.settings.refine_with_prior
             try:
