@@ -147,3 +147,20 @@ def test_out_of_range_marks_open_space_but_not_dropouts():
     obs = observation_image(depth, mask, Camera.preset("sr4000"))
     assert np.isinf(obs[:, 125:]).all()        # background: a limb drawn there pays the silhouette cost
     assert obs[70, 75] == 0 and obs[20, 20] == 0
+
+
+def test_body_height_is_fitted_when_the_sequence_does_not_give_it(tmp_path):
+    from depthtrack.io import open_sequence
+    from depthtrack.synth.generate import synthesize_procedural
+    from depthtrack.track.tracker import body_for_sequence
+
+    seq_dir = tmp_path / "short"
+    synthesize_procedural("wave", seq_dir, seconds=0.2, height=1.6)
+    meta = json.loads((seq_dir / "sequence.json").read_text())
+    del meta["subject"]
+    (seq_dir / "sequence.json").write_text(json.dumps(meta))
+    body, height = body_for_sequence(open_sequence(seq_dir))
+    assert "fitted" in height["source"]
+    assert abs(height["height_m"] - 1.6) < 0.08 * 1.6
+    assert body.height == pytest.approx(height["height_m"], abs=1e-3)
+    assert len(height["candidates"]) >= 5

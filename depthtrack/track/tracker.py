@@ -925,17 +925,23 @@ def fit_pose_to_joints(body, joints, regularisation: float = 0.01):
     return fit.x
 
 
-def body_for_sequence(seq, segmenter=None, frame: int = 0):
+def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_height: bool = True):
     """The default body scaled to the subject, and where its height came from.
 
-    Height from ``sequence.json`` ``subject.height_m`` when present, else estimated from the
-    first frame's foreground (:func:`estimate_height`).
+    Height from ``sequence.json`` ``subject.height_m`` when present. Otherwise a first
+    guess from the frame's foreground extent (:func:`estimate_height`), which raised arms
+    inflate and bent or foreshortened legs shrink; with ``fit_height`` the height is then
+    chosen by the likelihood: the automatic initialisation ("hc") runs on the frame for
+    heights 8 % apart around the guess (five, then further out while the best is at an
+    edge; within 1.2 .. 2.2 m), and the height whose fitted pose explains the frame best
+    wins, refined by a parabola through its neighbours.
 
     Returns
     -------
     body : BodyModel
     height : dict
-        ``{"height_m": float, "source": "sequence.json" | "estimated from the foreground"}``
+        ``{"height_m": float, "source": str}`` and, when fitted, ``"candidates"``: the heights
+        tried and their likelihood energies.
     """
     from ..body import BodyModel
 
@@ -944,13 +950,59 @@ def body_for_sequence(seq, segmenter=None, frame: int = 0):
         return BodyModel.default(height=h), {"height_m": h, "source": "sequence.json subject.height_m"}
     if segmenter is None:
         from ..detect import segment_foreground as segmenter
-    fg = segmenter(seq.depth(frame), seq.camera)
+    depth = seq.depth(frame)
+    fg = segmenter(depth, seq.camera)
     points = robust_points(fg.points)
     if len(points) < 20:
         raise InputError(seq.path, f"no person found in frame {frame} to estimate the body height")
-    h = estimate_height(points)
-    return BodyModel.default(height=h), {"height_m": round(h, 3),
-                                         "source": "estimated from the first frame's foreground"}
+    guess = estimate_height(points)
+    if not fit_height:
+        return BodyModel.default(height=guess), {"height_m": round(guess, 3),
+                                                 "source": "estimated from the first frame's foreground"}
+    t0 = time.perf_counter()
+    tried = {}
+
+    def energy_at(h):
+        h = round(float(np.clip(h, 1.2, 2.2)), 3)
+        if h not in tried:
+            tracker = Tracker(BodyModel.default(height=h), seq.camera, method="hc", fps=seq.fps,
+                              settings=settings, segmenter=segmenter)
+            tried[h] = tracker._likelihood_energy(tracker.init(depth))
+        return h
+
+    ratio = 1.08
+    grid = [energy_at(guess * ratio ** k) for k in (-2, -1, 0, 1, 2)]
+    # walk outwards while the best height is at an edge of what was tried
+    for _ in range(3):
+        heights = sorted(tried)
+        best = min(heights, key=tried.get)
+        if best == heights[0] and best > 1.2:
+            energy_at(best / ratio)
+        elif best == heights[-1] and best < 2.2:
+            energy_at(best * ratio)
+        else:
+            break
+    heights = np.array(sorted(tried))
+    energies = np.array([tried[h] for h in heights])
+    k = int(np.argmin(energies))
+    h = float(heights[k])
+    if 0 < k < len(heights) - 1:
+        # vertex of the parabola through the best height and its neighbours, in log height
+        # (the grid is geometric)
+        x0, x1, x2 = np.log(heights[k - 1:k + 2])
+        e0, e1, e2 = energies[k - 1:k + 2]
+        denom = (x0 - x1) * (x0 - x2) * (x1 - x2)
+        a = (x2 * (e1 - e0) + x1 * (e0 - e2) + x0 * (e2 - e1)) / denom
+        b = (x2 ** 2 * (e0 - e1) + x1 ** 2 * (e2 - e0) + x0 ** 2 * (e1 - e2)) / denom
+        if a > 0:
+            h = float(np.exp(np.clip(-b / (2 * a), x0, x2)))
+    return BodyModel.default(height=h), {
+        "height_m": round(h, 3),
+        "source": "fitted to the first frame by the likelihood (no subject.height_m)",
+        "foreground_guess_m": round(guess, 3),
+        "seconds": round(time.perf_counter() - t0, 2),
+        "candidates": [{"height_m": round(float(a), 3), "energy": round(float(b), 1)}
+                       for a, b in zip(heights, energies)]}
 
 
 def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
@@ -977,7 +1029,7 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         For ``summary.json``: method, likelihood, initialisation, body height and its source,
         settings, prior, timings per stage, ``seconds`` and ``processing_fps``.
     """
-    body, height = body_for_sequence(seq, segmenter)
+    body, height = body_for_sequence(seq, segmenter, settings=settings)
     tracker = Tracker(body, seq.camera, method=method, likelihood=likelihood, fps=seq.fps,
                       settings=settings, segmenter=segmenter, detector=detector)
     init_pose = None
@@ -999,6 +1051,7 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "initialisation_details": info["initialisation"],
         "body_height_m": height["height_m"],
         "body_height_source": height["source"],
+        "body_height_fit": {k: v for k, v in height.items() if k not in ("height_m", "source")} or None,
         "seconds": round(seconds, 3),
         "processing_fps": round(len(seq) / seconds, 3) if seconds > 0 else None,
         "timings": result.timings,
