@@ -164,3 +164,43 @@ def test_body_height_is_fitted_when_the_sequence_does_not_give_it(tmp_path):
     assert abs(height["height_m"] - 1.6) < 0.08 * 1.6
     assert body.height == pytest.approx(height["height_m"], abs=1e-3)
     assert len(height["candidates"]) >= 5
+
+
+class _Frames:
+    def __init__(self, frames):
+        self.frames = frames
+
+    def __len__(self):
+        return len(self.frames)
+
+    def depth(self, i):
+        return self.frames[i]
+
+
+def test_frames_without_a_person_get_no_pose_and_tracking_restarts(scene):
+    body, truth, frames = scene
+    empty = np.zeros_like(frames[0])
+    seq = _Frames([empty, empty] + frames[:4] + [empty] + frames[4:7])
+    tracker = Tracker(body, CAMERA, method="hc", segmenter=_segment)
+    result = tracker.track_sequence(seq)
+    missing = ~np.isfinite(result.poses).all(axis=1)
+    np.testing.assert_array_equal(np.flatnonzero(missing), [0, 1, 6])
+    assert np.isnan(result.joints[missing]).all()
+    assert tracker.counts["reinitialisations"] == 1 and tracker.counts["frames_without_person"] == 3
+    order = [2, 3, 4, 5, 7, 8, 9]
+    err = _errors(body, result.poses[order], truth[:7])
+    assert err.mean() < 0.05
+
+
+def test_missing_estimates_count_as_misses():
+    from depthtrack.evaluate.metrics import fraction_within, mean_error, point_errors
+
+    truth = np.zeros((2, 2, 3))
+    truth[1, 1] = np.nan                                   # unknown truth: left out
+    estimated = np.zeros((2, 2, 3))
+    estimated[0, 0] = [0.02, 0.0, 0.0]
+    estimated[0, 1] = np.nan                               # the tracker reported nothing
+    errors = point_errors(estimated, truth)
+    assert np.isinf(errors[0, 1]) and np.isnan(errors[1, 1])
+    assert fraction_within(errors, 0.1) == pytest.approx(2 / 3)
+    assert mean_error(errors) == pytest.approx(0.02 / 2)

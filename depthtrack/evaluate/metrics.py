@@ -36,14 +36,19 @@ def point_errors(estimated, truth):
     Returns
     -------
     errors : (F, N) float
-        ``||estimated - truth||``; NaN where either point has a NaN coordinate.
+        ``||estimated - truth||``; NaN where the truth is unknown; ``+inf`` where the truth
+        is known but the estimate is not (a frame the tracker reported nothing for). The
+        summaries below leave NaN out everywhere; ``+inf`` counts as a miss in
+        :func:`fraction_within` and is left out of the averages of distances.
     """
     estimated = np.asarray(estimated, dtype=np.float64)
     truth = np.asarray(truth, dtype=np.float64)
     if estimated.shape != truth.shape or estimated.ndim < 1 or estimated.shape[-1] != 3:
         raise ValueError(f"estimated {estimated.shape} and truth {truth.shape} must both be (..., 3)")
     # a NaN coordinate propagates through the norm, so unknown stays unknown
-    return np.sqrt(np.sum((estimated - truth) ** 2, axis=-1))
+    errors = np.sqrt(np.sum((estimated - truth) ** 2, axis=-1))
+    missing = ~np.all(np.isfinite(estimated), axis=-1) & np.all(np.isfinite(truth), axis=-1)
+    return np.where(missing, np.inf, errors)
 
 
 #: The per-joint errors are point errors over the 15 contract joints.
@@ -102,9 +107,11 @@ def mean_max_error(errors) -> float:
 def fraction_within(errors, threshold: float = WITHIN_THRESHOLD_M) -> float:
     """Fraction of the known entries of ``errors (F, N)`` that are ``<= threshold``.
 
-    NaN when nothing is known.
+    Missing estimates (``+inf``, see :func:`point_errors`) count as misses. NaN when
+    nothing is known.
     """
-    errors, known = _known(errors)
+    errors = np.asarray(errors, dtype=np.float64)
+    known = ~np.isnan(errors)
     return float(np.mean(errors[known] <= threshold)) if known.any() else float("nan")
 
 

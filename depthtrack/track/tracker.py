@@ -135,6 +135,10 @@ class TrackerSettings:
     facing_prior : float
         Weight of the initial-heading prior of the global search (see
         :meth:`Tracker._facing_penalty`), per foreground pixel.
+    min_person_area : float
+        A frame whose foreground covers less than this (m^2, :func:`visible_area`) has no
+        person in it: no pose is reported for it, and tracking starts afresh (automatic
+        initialisation) on the next frame with a person.
     lost_ratio, lost_margin : float
         Track counts as lost when the share of the observation the fitted pose leaves
         unexplained (:meth:`Tracker.unexplained`) exceeds both
@@ -168,6 +172,7 @@ class TrackerSettings:
     facing_prior: float = 0.1
     lost_ratio: float = 1.6
     lost_margin: float = 0.15
+    min_person_area: float = 0.08
 
     def to_dict(self) -> dict:
         return dict(self.__dict__)
@@ -207,6 +212,17 @@ def square_roi(mask, margin: float, min_size: int = 16):
     cu = 0.5 * (cols[0] + cols[-1])
     cv = 0.5 * (rows[0] + rows[-1])
     return (cu - 0.5 * (size - 1), cv - 0.5 * (size - 1), size)
+
+
+def visible_area(foreground, camera) -> float:
+    """Surface area (m^2) a foreground's pixels cover: sum of ``z^2 / (fx fy)`` per pixel.
+
+    Independent of the camera's resolution and of the distance: a whole adult seen from the
+    front covers about 0.5 m^2, one entering at the image edge less.
+    """
+    points = np.asarray(foreground.points, dtype=np.float64).reshape(-1, 3)
+    z = points[:, 2][points[:, 2] > 0]
+    return float(np.sum(z * z) / (camera.fx * camera.fy))
 
 
 def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
@@ -395,7 +411,8 @@ class Tracker:
         self.timings = {k: 0.0 for k in ("segment", "render", "detect", "evidence", "search",
                                          "association", "init", "recover")}
         self.counts = {"candidates": 0, "render_calls": 0, "detections": 0, "correspondences": 0,
-                       "accepted": 0, "recoveries_tried": 0, "recoveries": 0}
+                       "accepted": 0, "recoveries_tried": 0, "recoveries": 0,
+                       "frames_without_person": 0, "reinitialisations": 0}
         self.frame_log = []
         self.init_info = {}
         self._after_init = None
@@ -627,8 +644,11 @@ class Tracker:
         self.velocity = np.zeros(self.body.dof)
         self.frame_log.append({"energy": e, "cost": self.unexplained(x)})
         self.timings["init"] += time.perf_counter() - t0
-        self._after_init = dict(self.timings)
-        self._counts_after_init = dict(self.counts)
+        if self._after_init is None:
+            self._after_init = dict(self.timings)
+            self._counts_after_init = dict(self.counts)
+        else:
+            self.counts["reinitialisations"] += 1
         return x.copy()
 
     def _automatic_init(self, depth0, fg):
@@ -764,6 +784,8 @@ class Tracker:
         x_pred, self._v_pred = self.prior.predict(x_prev, self.velocity)
         x_pred = self.body.clip(x_pred)
         fg = self._observe(depth, predicted=x_pred)
+        if not self.person_present(fg):
+            return self._lose_person()
         self._use_prior = True
         starts = np.stack([x_pred, x_prev])
         e_starts = self.energy(starts)
@@ -784,6 +806,19 @@ class Tracker:
         self.pose = x
         self.frame_log.append({"energy": e, "cost": cost, "accepted": accepted, "recovered": recovered})
         return x.copy()
+
+    def person_present(self, foreground) -> bool:
+        """Whether a :class:`~depthtrack.detect.Foreground` holds a person (see
+        :attr:`TrackerSettings.min_person_area`)."""
+        return visible_area(foreground, self.camera) >= self.settings.min_person_area
+
+    def _lose_person(self):
+        """No person in the frame: forget the track (the next person starts afresh)."""
+        self.pose = None
+        self.velocity = np.zeros(self.body.dof)
+        self.counts["frames_without_person"] += 1
+        self.frame_log.append({"absent": True})
+        return None
 
     def _polish(self, x):
         """Finest rung of the search again at the fine tile resolution (when configured)."""
@@ -827,6 +862,10 @@ class Tracker:
     def track_sequence(self, seq, progress=None, init_pose=None) -> TrackResult:
         """Track every frame of a :class:`~depthtrack.io.sequence.Sequence`.
 
+        Frames without a person (:meth:`person_present`) get NaN poses and joints; tracking
+        (re)starts with the automatic initialisation on the next frame with a person, so a
+        recording may open on an empty room and the subject may leave and come back.
+
         Parameters
         ----------
         seq : Sequence
@@ -837,11 +876,20 @@ class Tracker:
             automatic initialisation.
         """
         F = len(seq)
-        poses = np.empty((F, self.body.dof))
+        poses = np.full((F, self.body.dof), np.nan)
         t0 = time.perf_counter()
         for i in range(F):
             depth = seq.depth(i)
-            poses[i] = self.init(depth, pose=init_pose) if i == 0 else self.step(depth)
+            if i == 0 and init_pose is not None:
+                x = self.init(depth, pose=init_pose)
+            elif self.pose is None:
+                x = self.init(depth) if self.person_present(self.segmenter(depth, self.camera)) else None
+                if x is None:
+                    self.counts["frames_without_person"] += 1
+            else:
+                x = self.step(depth)
+            if x is not None:
+                poses[i] = x
             if progress is not None:
                 progress.update(1)
         total = time.perf_counter() - t0
@@ -881,7 +929,7 @@ class Tracker:
         return {"method": self.method, "likelihood": self.likelihood,
                 "settings": self.settings.to_dict(), "prior": self.prior.to_dict(),
                 "initialisation": self.init_info, "counts": dict(self.counts),
-                "energies": [f["energy"] for f in self.frame_log]}
+                "energies": [f.get("energy") for f in self.frame_log]}
 
 
 # ---------------------------------------------------------------------- helpers for callers
@@ -929,7 +977,7 @@ def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_he
     """The default body scaled to the subject, and where its height came from.
 
     Height from ``sequence.json`` ``subject.height_m`` when present. Otherwise a first
-    guess from the frame's foreground extent (:func:`estimate_height`), which raised arms
+    guess from the foreground extent of the first frame (from ``frame`` on) with a person, (:func:`estimate_height`), which raised arms
     inflate and bent or foreshortened legs shrink; with ``fit_height`` the height is then
     chosen by the likelihood: the automatic initialisation ("hc") runs on the frame for
     heights 8 % apart around the guess (five, then further out while the best is at an
@@ -950,11 +998,15 @@ def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_he
         return BodyModel.default(height=h), {"height_m": h, "source": "sequence.json subject.height_m"}
     if segmenter is None:
         from ..detect import segment_foreground as segmenter
-    depth = seq.depth(frame)
-    fg = segmenter(depth, seq.camera)
+    min_area = (settings or TrackerSettings()).min_person_area
+    for frame in range(frame, len(seq)):       # the first frame with a person in it
+        depth = seq.depth(frame)
+        fg = segmenter(depth, seq.camera)
+        if visible_area(fg, seq.camera) >= min_area:
+            break
+    else:
+        raise InputError(seq.path, "no person found in any frame")
     points = robust_points(fg.points)
-    if len(points) < 20:
-        raise InputError(seq.path, f"no person found in frame {frame} to estimate the body height")
     guess = estimate_height(points)
     if not fit_height:
         return BodyModel.default(height=guess), {"height_m": round(guess, 3),
