@@ -26,7 +26,8 @@ def _pair():
 def test_point_errors_are_distances_with_nan_for_unknown():
     est, truth = _pair()
     err = metrics.joint_errors(est, truth)
-    expected = np.array([[0.05, 0.30, nan], [0.10, nan, 0.02]])
+    # unknown truth: NaN (left out); known truth without an estimate: +inf (a miss)
+    expected = np.array([[0.05, 0.30, nan], [0.10, np.inf, 0.02]])
     np.testing.assert_allclose(err, expected, atol=1e-12)
 
 
@@ -36,9 +37,9 @@ def test_summary_statistics_by_hand():
     assert metrics.mean_error(err) == pytest.approx((0.05 + 0.30 + 0.10 + 0.02) / 4)
     # worst per frame 0.30 and 0.10
     assert metrics.mean_max_error(err) == pytest.approx(0.20)
-    # within 10 cm (inclusive): 0.05, 0.10, 0.02 of 4
-    assert metrics.fraction_within(err, 0.10) == pytest.approx(0.75)
-    assert metrics.fraction_within(err, 0.04) == pytest.approx(0.25)
+    # within 10 cm (inclusive): 0.05, 0.10, 0.02 of 5 (the missing estimate is a miss)
+    assert metrics.fraction_within(err, 0.10) == pytest.approx(0.6)
+    assert metrics.fraction_within(err, 0.04) == pytest.approx(0.2)
     np.testing.assert_allclose(metrics.per_frame_mean(err), [0.175, 0.06])
     np.testing.assert_allclose(metrics.per_point_mean(err), [0.075, 0.30, 0.02])
 

@@ -358,34 +358,53 @@ def segment_foreground(depth, camera, floor: bool = True, up=(0.0, -1.0, 0.0), m
             height = cloud @ plane[:3] + plane[3]
             valid &= height > inlier_distance(z)
     valid &= ~flying_pixels(z, valid, camera.fx, base=jump)
-    labels, count = surface_components(z, valid, camera.fx, base=jump)
-    sizes = np.bincount(labels[valid], minlength=count)
-    flat_labels = labels.ravel()
     flat_cloud = cloud.reshape(-1, 3)
-    order = np.argsort(flat_labels, kind="stable")
-    starts = np.searchsorted(flat_labels[order], np.arange(count + 1))
 
-    def members(c):
-        return order[starts[c]:starts[c + 1]]
+    def pick(valid, walls):
+        """Components of ``valid`` and the person among them (largest non-wall surface)."""
+        labels, count = surface_components(z, valid, camera.fx, base=jump)
+        sizes = np.bincount(labels[valid], minlength=count)
+        flat_labels = labels.ravel()
+        order = np.argsort(flat_labels, kind="stable")
+        starts = np.searchsorted(flat_labels[order], np.arange(count + 1))
 
-    # metric area of each surface (for the wall test): a pixel at depth z covers z^2 / (fx fy) m^2
-    area = np.bincount(labels[valid], weights=z[valid] ** 2, minlength=count) / (camera.fx * camera.fy)
-    person, background, walls = None, set(), []
-    for c in np.argsort(-sizes, kind="stable"):
-        if sizes[c] < min_pixels:
-            break                                      # size order: the rest are smaller still
-        pts = flat_cloud[members(c)]
-        if walls and _on_planes(pts, walls) >= planar_fraction_min:
-            background.add(int(c))                     # a piece of a wall seen between limbs
-            continue
-        frac, pl = planar_fraction(pts, rng)
-        if frac >= planar_fraction_min and (area[c] >= min_planar_area
-                                            or _in_plane_extent(pts, pl).max() >= min_planar_extent):
-            background.add(int(c))                     # a wall
-            walls.append(pl)
-            continue
-        person = int(c)
-        break
+        def members(c):
+            return order[starts[c]:starts[c + 1]]
+
+        # metric area of each surface (for the wall test): a pixel at depth z covers z^2 / (fx fy) m^2
+        area = np.bincount(labels[valid], weights=z[valid] ** 2, minlength=count) / (camera.fx * camera.fy)
+        person, background = None, set()
+        for c in np.argsort(-sizes, kind="stable"):
+            if sizes[c] < min_pixels:
+                break                                      # size order: the rest are smaller still
+            pts = flat_cloud[members(c)]
+            if walls and _on_planes(pts, walls) >= planar_fraction_min:
+                background.add(int(c))                     # a piece of a wall seen between limbs
+                continue
+            frac, pl = planar_fraction(pts, rng)
+            if frac >= planar_fraction_min and (area[c] >= min_planar_area
+                                                or _in_plane_extent(pts, pl).max() >= min_planar_extent):
+                background.add(int(c))                     # a wall
+                walls.append(pl)
+                continue
+            person = int(c)
+            break
+        return labels, sizes, members, person, background
+
+    walls = []
+    labels, sizes, members, person, background = pick(valid, walls)
+    if person is None and walls:
+        # A person close to a wall can join it through flying or noisy pixels and vanish in
+        # the "wall" surface. Drop the walls' plane inliers and look again: what stands off
+        # the planes separates from them.
+        planes = np.asarray(walls, dtype=np.float64)
+        on_wall = np.isin(labels, list(background)) & valid
+        dist = np.abs(cloud[on_wall] @ planes[:, :3].T + planes[:, 3]).min(axis=1)
+        inlier = np.zeros(z.shape, dtype=bool)
+        inlier[on_wall] = dist < inlier_distance(z[on_wall])
+        if (on_wall & ~inlier).sum() >= min_pixels:
+            valid = valid & ~inlier
+            labels, sizes, members, person, background = pick(valid, walls)
     mask = np.zeros(z.shape, dtype=bool)
     if person is not None:
         keep = [person]

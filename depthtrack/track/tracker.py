@@ -137,8 +137,12 @@ class TrackerSettings:
         :meth:`Tracker._facing_penalty`), per foreground pixel.
     min_person_area : float
         A frame whose foreground covers less than this (m^2, :func:`visible_area`) has no
-        person in it: no pose is reported for it, and tracking starts afresh (automatic
-        initialisation) on the next frame with a person.
+        person in it. Before the first person, such frames get no pose; during tracking,
+        the track is dropped after ``absent_frames`` such frames in a row (a segmentation
+        that fails for a frame or two must not end a good track), those frames get no pose,
+        and tracking starts afresh (automatic initialisation) on the next frame with a person.
+    absent_frames : int
+        See ``min_person_area``.
     lost_ratio, lost_margin : float
         Track counts as lost when the share of the observation the fitted pose leaves
         unexplained (:meth:`Tracker.unexplained`) exceeds both
@@ -173,6 +177,7 @@ class TrackerSettings:
     lost_ratio: float = 1.6
     lost_margin: float = 0.15
     min_person_area: float = 0.08
+    absent_frames: int = 3
 
     def to_dict(self) -> dict:
         return dict(self.__dict__)
@@ -389,6 +394,8 @@ class Tracker:
         if detector is None and method != "hc":
             from ..detect import detect_parts as detector
         self.detector = detector
+        if int(s.absent_frames) < 1:
+            raise InputError(None, f"absent_frames must be at least 1, not {s.absent_frames}")
         if s.refine_scope not in ("chain", "body"):
             raise InputError(None, f"refine_scope must be 'chain' or 'body', not {s.refine_scope!r}")
         self.parts = PartModel.from_body(body)
@@ -416,6 +423,7 @@ class Tracker:
         self.frame_log = []
         self.init_info = {}
         self._after_init = None
+        self._absent = 0
         self._counts_after_init = {}
         self._up = None
         self._floor = None
@@ -784,7 +792,8 @@ class Tracker:
         x_pred, self._v_pred = self.prior.predict(x_prev, self.velocity)
         x_pred = self.body.clip(x_pred)
         fg = self._observe(depth, predicted=x_pred)
-        if not self.person_present(fg):
+        self._absent = 0 if self.person_present(fg) else self._absent + 1
+        if self._absent >= self.settings.absent_frames:
             return self._lose_person()
         self._use_prior = True
         starts = np.stack([x_pred, x_prev])
@@ -813,8 +822,10 @@ class Tracker:
         return visible_area(foreground, self.camera) >= self.settings.min_person_area
 
     def _lose_person(self):
-        """No person in the frame: forget the track (the next person starts afresh)."""
+        """No person for :attr:`TrackerSettings.absent_frames` frames: forget the track (the
+        next person starts afresh)."""
         self.pose = None
+        self._absent = 0
         self.velocity = np.zeros(self.body.dof)
         self.counts["frames_without_person"] += 1
         self.frame_log.append({"absent": True})
@@ -888,6 +899,9 @@ class Tracker:
                     self.counts["frames_without_person"] += 1
             else:
                 x = self.step(depth)
+                if x is None:                       # the track was dropped: its empty frames too
+                    poses[i - self.settings.absent_frames + 1:i + 1] = np.nan
+                    self.counts["frames_without_person"] += self.settings.absent_frames - 1
             if x is not None:
                 poses[i] = x
             if progress is not None:
