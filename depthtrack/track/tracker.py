@@ -143,6 +143,11 @@ class TrackerSettings:
         and tracking starts afresh (automatic initialisation) on the next frame with a person.
     absent_frames : int
         See ``min_person_area``.
+    heading_frames, heading_margin : int, float
+        After an automatic initialisation, the pose and its twin turned to face the other
+        way are both tracked through this many frames, and the turned one replaces the first
+        when its unexplained share (:meth:`Tracker.unexplained`) is lower by this fraction
+        (:meth:`Tracker._settle_heading`); 0 frames = off.
     lost_ratio, lost_margin : float
         Track counts as lost when the share of the observation the fitted pose leaves
         unexplained (:meth:`Tracker.unexplained`) exceeds both
@@ -177,6 +182,8 @@ class TrackerSettings:
     lost_ratio: float = 1.6
     lost_margin: float = 0.15
     min_person_area: float = 0.08
+    heading_frames: int = 10
+    heading_margin: float = 0.1
     absent_frames: int = 3
 
     def to_dict(self) -> dict:
@@ -889,7 +896,9 @@ class Tracker:
         F = len(seq)
         poses = np.full((F, self.body.dof), np.nan)
         t0 = time.perf_counter()
-        for i in range(F):
+        i = -1
+        while i + 1 < F:
+            i += 1
             depth = seq.depth(i)
             if i == 0 and init_pose is not None:
                 x = self.init(depth, pose=init_pose)
@@ -897,6 +906,11 @@ class Tracker:
                 x = self.init(depth) if self.person_present(self.segmenter(depth, self.camera)) else None
                 if x is None:
                     self.counts["frames_without_person"] += 1
+                elif self.settings.heading_frames > 0 and i + self.settings.heading_frames < F:
+                    last = self._settle_heading(seq, i, poses, progress)
+                    if last > i:
+                        i = last
+                        continue
             else:
                 x = self.step(depth)
                 if x is None:                       # the track was dropped: its empty frames too
@@ -909,6 +923,93 @@ class Tracker:
         total = time.perf_counter() - t0
         joints = np.asarray(self.body.joint_positions(poses))
         return TrackResult(poses, joints, self.timing_summary(total, F), self.describe())
+
+    #: Tracker attributes that make up the state of a track (saved and restored by
+    #: :meth:`_settle_heading`; timings and counts keep accumulating).
+    _TRACK_STATE = ("pose", "velocity", "_v_pred", "_use_prior", "_weight", "roi", "foreground",
+                    "frame_log", "init_info", "_up", "_floor", "_heading", "_detections", "_absent")
+
+    def _save_state(self) -> dict:
+        import copy
+
+        state = {k: copy.deepcopy(getattr(self, k)) for k in self._TRACK_STATE}
+        state["frames_without_person"] = self.counts["frames_without_person"]
+        return state
+
+    def _restore_state(self, state: dict) -> None:
+        for k, v in state.items():
+            if k == "frames_without_person":
+                self.counts[k] = v
+            else:
+                setattr(self, k, v)
+
+    def turned_pose(self, pose):
+        """``pose (48,)`` turned half a turn about the body's long axis through the pelvis:
+        the same silhouette seen from the other side (front and back swapped)."""
+        from ..body.rotations import rotvec_to_matrix
+
+        x = np.array(pose, dtype=np.float64)
+        R = rotvec_to_matrix(x[3:6])
+        axis = R @ np.array([0.0, -1.0, 0.0])
+        x[3:6] = matrix_to_rotvec((rotation_about(axis, np.pi) @ R)[None])[0]
+        return x
+
+    def _settle_heading(self, seq, first, poses, progress) -> int:
+        """Decide between the initial pose and its turned twin by tracking both.
+
+        A depth image barely tells a body's front from its back, and the initial heading
+        prior (:meth:`_facing_penalty`) assumes the person faces the camera. Motion does tell
+        them apart: knees and elbows bend one way only. Both hypotheses are tracked through
+        the next :attr:`TrackerSettings.heading_frames` frames; the turned one is kept only
+        when its fit explains the frames clearly better (mean :meth:`unexplained` share lower
+        by :attr:`TrackerSettings.heading_margin`). Fills ``poses`` and returns the last frame
+        index processed (``first`` when the check could not run).
+        """
+        K = self.settings.heading_frames
+        depths = [seq.depth(j) for j in range(first + 1, first + K + 1)]
+        start = self._save_state()
+
+        def run(x0):
+            self.pose = x0
+            out = []
+            for d in depths:
+                x = self.step(d)
+                if x is None:
+                    return None, None
+                out.append(x)
+            costs = [f["cost"] for f in self.frame_log[-K:]]
+            return np.array(out), float(np.mean(costs))
+
+        x_front = self.pose.copy()
+        track_a, cost_a = run(x_front)
+        if track_a is None:
+            self._restore_state(start)
+            return first
+        after_a = self._save_state()
+        self._restore_state(start)
+        self._observe(seq.depth(first))
+        self._use_prior = False
+        x_turned, _ = self._climb(self.turned_pose(x_front), passes=self.settings.init_passes,
+                                  climber=self.search_climber)
+        start_b = self._save_state()
+        start_b["pose"] = x_turned
+        self._restore_state(start_b)
+        track_b, cost_b = run(x_turned)
+        choice = "initial"
+        if track_b is not None and cost_b < (1.0 - self.settings.heading_margin) * cost_a:
+            choice = "turned"
+            poses[first] = x_turned
+            poses[first + 1:first + K + 1] = track_b
+        else:
+            self._restore_state(after_a)
+            poses[first] = x_front
+            poses[first + 1:first + K + 1] = track_a
+        self.init_info = {**self.init_info, "heading_check": {
+            "frames": K, "unexplained_initial": round(cost_a, 4),
+            "unexplained_turned": None if cost_b is None else round(cost_b, 4), "kept": choice}}
+        if progress is not None:
+            progress.update(K + 1)           # the initial frame too
+        return first + K
 
     def timing_summary(self, total, frames) -> dict:
         """Where the time went: totals, and per tracked frame (initialisation excluded).
