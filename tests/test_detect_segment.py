@@ -113,7 +113,7 @@ def test_person_near_the_back_wall_is_not_lost_in_it(tmp_path):
     # joined the back wall through noisy pixels and the whole surface was taken for a wall.
     from depthtrack.io import open_sequence
     from depthtrack.synth.generate import synthesize_bvh
-    from depthtrack.track.tracker import visible_area
+    from depthtrack.track.observation import visible_area
 
     path = Path(__file__).resolve().parents[2] / "shared" / "data" / "motions" / "jump.bvh"
     synthesize_bvh(path, tmp_path / "jump", camera="sr4000", noise="tof", fps=25.0)

@@ -70,7 +70,7 @@ def test_recovers_a_perturbed_pose_from_rendered_depth():
     from depthtrack.body import BodyModel
     from depthtrack.camera import Camera
     from depthtrack.render import FrameRenderer, TileRenderer
-    from depthtrack.track.tracker import square_roi
+    from depthtrack.track.observation import square_roi
 
     body = BodyModel.default(1.75)
     camera = Camera.preset("sr4000")

@@ -128,7 +128,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path):
 
 
 def test_out_of_range_marks_open_space_but_not_dropouts():
-    from depthtrack.track.tracker import observation_image, out_of_range
+    from depthtrack.track.observation import observation_image, out_of_range
 
     depth = np.full((144, 176), 3.0, np.float32)
     depth[:, 120:] = 0.0                       # the room beyond the sensor's range on the right

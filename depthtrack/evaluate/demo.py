@@ -72,7 +72,7 @@ def write_demo_tiles(path, body, camera, rng, wall_m: float = 4.5):
     """
     from ..render import FrameRenderer, TileRenderer
     from ..render.tiles_figure import write_tiles_figure
-    from ..track.tracker import square_roi
+    from ..track.observation import square_roi
 
     candidates = perturbed_candidates(demo_pose(body), TILE_CANDIDATES, rng)
     observed_index = 1 + int(rng.integers(TILE_CANDIDATES - 1))

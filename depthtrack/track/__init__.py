@@ -4,7 +4,9 @@
   "hc", "ep", "hc+ep", the MAP energy, automatic initialisation and recovery;
 * :mod:`.hill_climb` -- coarse-to-fine, block-parallel search down the kinematic chain;
 * :mod:`.evidence` -- evidence propagation by iterated unscented statistical linearisation;
-* :mod:`.association` -- prune, expand and greedily try part-detection correspondences.
+* :mod:`.association` -- prune, expand and greedily try part-detection correspondences;
+* :mod:`.observation` -- the ROI, the observed image the likelihood compares with, open space,
+  the visible area and the height guess (pure functions).
 """
 from .association import associate, expand_correspondences, prune_explained
 from .evidence import PartModel, iterated_unscented_update, propagate_evidence, sigma_points
