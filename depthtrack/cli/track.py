@@ -19,7 +19,11 @@ examples:
 
 OUT gets joints.csv, poses.npz, track.bvh and summary.json (method, settings, body height
 and where it came from, timings per stage, frames per second). The body height is read
-from sequence.json (subject.height_m) or estimated from the first frame."""
+from sequence.json (subject.height_m), or else fitted to the first frame with a person by
+the likelihood (a few seconds). After the automatic start, the pose and its twin facing
+the other way are both tracked for ten frames and the better kept (a depth image barely
+tells front from back). Frames without a person (an empty room, the subject gone) get no
+pose; tracking starts again when someone appears."""
 
 OVERLAY_SUFFIXES = (".mp4", ".gif")
 
