@@ -108,6 +108,12 @@ class Camera:
         uv[z <= 0] = np.nan
         return uv
 
+    def pixel_area(self, z) -> np.ndarray:
+        """Surface area (m^2) one pixel covers on a surface facing the camera at depth ``z``:
+        ``z^2 / (fx fy)``; any shape."""
+        z = np.asarray(z, dtype=float)
+        return z * z / (self.fx * self.fy)
+
     def rays(self) -> np.ndarray:
         """(H, W, 3) float: per-pixel ray directions with z = 1."""
         v, u = np.mgrid[0:self.height, 0:self.width].astype(float)

@@ -226,8 +226,8 @@ def geodesic_extrema(foreground, camera, count: int = 6, orientation_length: flo
     source = int(np.argmin(np.linalg.norm(g.points - centre, axis=1)))
     dist, pred = csgraph.dijkstra(g.graph, directed=False, indices=source, return_predecessors=True)
     from_centre = dist.copy()
-    # surface area each node stands for: its pixel footprint z^2 / (fx fy), times stride^2
-    node_area = g.points[:, 2] ** 2 * (g.stride ** 2 / (camera.fx * camera.fy))
+    # surface area each node stands for: its pixel footprint, times stride^2
+    node_area = camera.pixel_area(g.points[:, 2]) * g.stride ** 2
     nodes, found, dirs, centres, areas = [], [], [], [], []
     for _ in range(count):
         finite = np.where(np.isfinite(dist), dist, -1.0)

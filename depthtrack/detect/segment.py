@@ -371,8 +371,8 @@ def segment_foreground(depth, camera, floor: bool = True, up=(0.0, -1.0, 0.0), m
         def members(c):
             return order[starts[c]:starts[c + 1]]
 
-        # metric area of each surface (for the wall test): a pixel at depth z covers z^2 / (fx fy) m^2
-        area = np.bincount(labels[valid], weights=z[valid] ** 2, minlength=count) / (camera.fx * camera.fy)
+        # metric area of each surface (for the wall test)
+        area = np.bincount(labels[valid], weights=camera.pixel_area(z[valid]), minlength=count)
         person, background = None, set()
         for c in np.argsort(-sizes, kind="stable"):
             if sizes[c] < min_pixels:

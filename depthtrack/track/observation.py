@@ -32,7 +32,7 @@ def visible_area(foreground, camera) -> float:
     """
     points = np.asarray(foreground.points, dtype=np.float64).reshape(-1, 3)
     z = points[:, 2][points[:, 2] > 0]
-    return float(np.sum(z * z) / (camera.fx * camera.fy))
+    return float(np.sum(camera.pixel_area(z)))
 
 
 def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):

@@ -34,6 +34,7 @@ our addition for hidden limbs).
 """
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import dataclass, field
 
@@ -43,6 +44,7 @@ import numpy as np
 from ..body.rotations import matrix_to_rotvec, rotation_about
 from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
+from ..motion.retarget import rotation_between
 from .association import associate
 from .evidence import PartModel, propagate_evidence
 from .hill_climb import HillClimber, default_blocks, restrict_blocks
@@ -214,21 +216,6 @@ class TrackResult:
     info: dict = field(default_factory=dict)
 
 
-def _align(a, b):
-    """Rotation matrix turning unit vector a onto b (3, 3)."""
-    a = a / np.linalg.norm(a)
-    b = b / np.linalg.norm(b)
-    axis = np.cross(a, b)
-    s = np.linalg.norm(axis)
-    c = float(np.dot(a, b))
-    if s < 1e-9:
-        if c > 0:
-            return np.eye(3)
-        helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
-        return rotation_about(np.cross(a, helper), np.pi)
-    return rotation_about(axis / s, np.arctan2(s, c))
-
-
 class Tracker:
     """Track a body through depth frames: ``init(depth0)`` then ``step(depth)`` per frame.
 
@@ -322,8 +309,9 @@ class Tracker:
         self._heading = None
 
     # ------------------------------------------------------------------ observation / energy
-    def _observe(self, depth, predicted=None):
-        """Segment the frame, set the ROI, upload the observation; returns the Foreground.
+    def _observe(self, depth, predicted=None, foreground=None):
+        """Segment the frame (unless its ``foreground`` is given), set the ROI, upload the
+        observation; returns the Foreground.
 
         The observation keeps the raw depth of every pixel that may be the person, so a
         segmentation that misses a limb does not forbid the model to cover it: only pixels
@@ -335,9 +323,11 @@ class Tracker:
         if depth.shape != self.camera.shape:
             raise InputError(None, f"depth frame is {depth.shape[1]} x {depth.shape[0]}, camera is "
                                    f"{self.camera.width} x {self.camera.height}")
-        t = time.perf_counter()
-        fg = self.segmenter(depth, self.camera)
-        self.timings["segment"] += time.perf_counter() - t
+        if foreground is None:
+            t = time.perf_counter()
+            foreground = self.segmenter(depth, self.camera)
+            self.timings["segment"] += time.perf_counter() - t
+        fg = foreground
         mask = np.asarray(fg.mask, dtype=bool)
         plane = getattr(fg, "floor_plane", None)
         if plane is not None:
@@ -517,20 +507,22 @@ class Tracker:
         model_up = np.array([0.0, -1.0, 0.0])
         out = []
         for axis in axes:
-            base = _align(model_up, axis)
+            base = rotation_between(model_up, axis)
             for k in range(8):
                 out.append(rotation_about(axis, k * np.pi / 4) @ base)
         return np.array(out)
 
-    def init(self, depth0, pose=None):
+    def init(self, depth0, pose=None, foreground=None):
         """Find the body in the first frame (automatic), or start from ``pose`` (48,) when given.
+
+        ``foreground``: the frame's segmentation when the caller already has it.
 
         Returns
         -------
         (48,) float pose.
         """
         t0 = time.perf_counter()
-        fg = self._observe(depth0)
+        fg = self._observe(depth0, foreground=foreground)
         self._use_prior = False
         if pose is not None:
             x = np.asarray(pose, dtype=np.float64).copy()
@@ -786,11 +778,12 @@ class Tracker:
             if i == 0 and init_pose is not None:
                 x = self.init(depth, pose=init_pose)
             elif self.pose is None:
-                x = self.init(depth) if self.person_present(self.segmenter(depth, self.camera)) else None
+                fg = self.segmenter(depth, self.camera)
+                x = self.init(depth, foreground=fg) if self.person_present(fg) else None
                 if x is None:
                     self.counts["frames_without_person"] += 1
                 elif self.settings.heading_frames > 0 and i + self.settings.heading_frames < F:
-                    last = self._settle_heading(seq, i, poses, progress)
+                    last = self._settle_heading(seq, i, depth, poses, progress)
                     if last > i:
                         i = last
                         continue
@@ -813,8 +806,6 @@ class Tracker:
                     "frame_log", "init_info", "_up", "_floor", "_heading", "_detections", "_absent")
 
     def _save_state(self) -> dict:
-        import copy
-
         state = {k: copy.deepcopy(getattr(self, k)) for k in self._TRACK_STATE}
         state["frames_without_person"] = self.counts["frames_without_person"]
         return state
@@ -837,7 +828,7 @@ class Tracker:
         x[3:6] = matrix_to_rotvec((rotation_about(axis, np.pi) @ R)[None])[0]
         return x
 
-    def _settle_heading(self, seq, first, poses, progress) -> int:
+    def _settle_heading(self, seq, first, depth, poses, progress) -> int:
         """Decide between the initial pose and its turned twin by tracking both.
 
         A depth image barely tells a body's front from its back, and the initial heading
@@ -845,8 +836,9 @@ class Tracker:
         them apart: knees and elbows bend one way only. Both hypotheses are tracked through
         the next :attr:`TrackerSettings.heading_frames` frames; the turned one is kept only
         when its fit explains the frames clearly better (mean :meth:`unexplained` share lower
-        by :attr:`TrackerSettings.heading_margin`). Fills ``poses`` and returns the last frame
-        index processed (``first`` when the check could not run).
+        by :attr:`TrackerSettings.heading_margin`). ``depth`` is frame ``first``, where the
+        track started. Fills ``poses`` and returns the last frame index processed (``first``
+        when the check could not run).
         """
         K = self.settings.heading_frames
         depths = [seq.depth(j) for j in range(first + 1, first + K + 1)]
@@ -870,13 +862,10 @@ class Tracker:
             return first
         after_a = self._save_state()
         self._restore_state(start)
-        self._observe(seq.depth(first))
+        self._observe(depth, foreground=self.foreground)     # the renderer holds the last frame
         self._use_prior = False
         x_turned, _ = self._climb(self.turned_pose(x_front), passes=self.settings.init_passes,
                                   climber=self.search_climber)
-        start_b = self._save_state()
-        start_b["pose"] = x_turned
-        self._restore_state(start_b)
         track_b, cost_b = run(x_turned)
         choice = "initial"
         if track_b is not None and cost_b < (1.0 - self.settings.heading_margin) * cost_a:
@@ -1017,7 +1006,7 @@ def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_he
         if h not in tried:
             tracker = Tracker(BodyModel.default(height=h), seq.camera, method="hc", fps=seq.fps,
                               settings=settings, segmenter=segmenter)
-            tried[h] = tracker._likelihood_energy(tracker.init(depth))
+            tried[h] = tracker._likelihood_energy(tracker.init(depth, foreground=fg))
         return h
 
     ratio = 1.08
