@@ -19,6 +19,8 @@ Timestamps are the bag's record times, in seconds from the first depth message.
 """
 from __future__ import annotations
 
+import contextlib
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -36,12 +38,33 @@ _BAG_MAGIC = b"#ROSBAG V2.0"
 _MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
-def _open_reader(path: Path):
+@contextlib.contextmanager
+def open_bag(path: Path):
+    """An open ``rosbags`` AnyReader over the bag at ``path`` (closed on leaving the block)."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
-    # ROS 2 bags written without message definitions need a default type store.
-    return AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+    named = path
+    with contextlib.ExitStack() as stack:
+        if path.is_file() and path.suffix.lower() != ".bag":
+            # AnyReader tells ROS 1 from ROS 2 by the ".bag" suffix alone; a ROS 1 bag under
+            # another name (found by its content) is read through a link that has it.
+            tmp = stack.enter_context(tempfile.TemporaryDirectory(prefix="depthtrack-bag-"))
+            link = Path(tmp) / "recording.bag"
+            link.symlink_to(path.resolve())
+            path = link
+        try:
+            # ROS 2 bags written without message definitions need a default type store.
+            reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+            stack.enter_context(reader)
+        except Exception as exc:  # rosbags raises its own error types for damaged bags
+            raise InputError(named, f"cannot read the bag ({exc})") from None
+        try:
+            yield reader
+        except InputError:
+            raise
+        except Exception as exc:  # a damaged message: rosbags' errors, struct and value errors
+            raise InputError(named, f"cannot read the bag ({type(exc).__name__}: {exc})") from None
 
 
 def _first(reader, connections):
@@ -95,7 +118,7 @@ class RosbagSequence(RecordingSequence):
         # Messages sharing a record time are told apart by their order.
         skip = int(np.count_nonzero(self._stamps[:start] == self._stamps[start]))
         frames = []
-        with _open_reader(self.path) as reader:
+        with open_bag(self.path) as reader:
             conns = [c for c in reader.connections if c.topic == self.topic]
             for conn, _, raw in reader.messages(connections=conns, start=int(self._stamps[start]),
                                                 stop=int(self._stamps[stop - 1]) + 1):
@@ -194,14 +217,7 @@ def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units
     path = Path(path)
     if path.is_file() and path.suffix.lower() in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
         path = path.parent
-    try:
-        reader = _open_reader(path)
-        reader.open()
-    except InputError:
-        raise
-    except Exception as exc:  # rosbags raises its own error types for damaged bags
-        raise InputError(path, f"cannot read the bag ({exc})") from None
-    try:
+    with open_bag(path) as reader:
         images, infos = {}, {}
         for conn in reader.connections:
             if conn.msgtype == IMAGE:
@@ -242,8 +258,6 @@ def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units
             scale = _realsense_depth_units(reader, topic) or 0.001
         source["depth_units"] = scale if first.encoding != "32FC1" else None
         stamps = _stamps(reader, images[topic])
-    finally:
-        reader.close()
     t = (stamps - stamps[0]) / 1e9
     rate = positive(fps, "fps", path) if fps is not None else fps_from_timestamps(t, 30.0)
     source["start_time"] = float(stamps[0]) / 1e9
