@@ -85,3 +85,53 @@ def test_binned_modes_scale_the_unbinned_camera():
     wide, _ = mode_intrinsics(params, "WFOV_UNBINNED")
     assert (wide.width, wide.height) == DEPTH_MODES["WFOV_UNBINNED"][2]
     assert wide.cx == pytest.approx(full.cx + 192) and wide.cy == pytest.approx(full.cy + 180)
+
+
+# ------------------------------------------------ written recordings (no shared data needed)
+def test_many_frames_in_any_order(tmp_path):
+    from k4a_writer import calibration_json, write_k4a_mkv
+
+    rng = np.random.default_rng(3)
+    frames = rng.integers(0, 5000, (20, 288, 320)).astype(np.uint16)
+    path = write_k4a_mkv(tmp_path / "binned.mkv", frames, "NFOV_2X2BINNED",
+                         calibration_json([0.51, 0.52, 0.49, 0.493] + [0.0] * 10))
+    seq = open_sequence(path)
+    assert len(seq) == 20 and seq.camera.shape == (288, 320)
+    assert seq.fps == pytest.approx(30.0, rel=0.02)          # from the frame times (ms clock)
+    assert np.all(np.diff(seq.timestamps) > 0)
+    # Sequential, backwards and jumping across read batches: always the right frame.
+    for i in list(range(20)) + [19, 3, 17, 0, 16, 15]:
+        assert np.array_equal(seq.raw_depth(i), frames[i]), i
+
+
+def test_wide_fov_is_undistorted_onto_the_pinhole_camera(tmp_path):
+    import cv2
+
+    from k4a_writer import calibration_json, write_k4a_mkv
+
+    # Strong radial distortion (rational model, as a WFOV lens) and a little tangential.
+    params = [0.5, 0.505, 0.245, 0.246, 0.4, -0.05, 0.0, 0.75, 0.05, 0.0, 0, 0, 2e-4, -1e-4]
+    h = w = 512
+    # Each pixel's value tells where it was (1 + index mod 60000), so resampling can be traced.
+    source = (1 + np.arange(h * w) % 60000).reshape(1, h, w).astype(np.uint16)
+    path = write_k4a_mkv(tmp_path / "wide.mkv", source, "WFOV_2X2BINNED", calibration_json(params))
+    seq = open_sequence(path)
+    assert seq.meta["source"]["undistorted"] is True               # auto: WFOV
+    cam = seq.camera
+    assert (cam.fx, cam.cx) == pytest.approx((0.245 * 512, 0.5 * 512 - 0.5))
+    out = seq.raw_depth(0)
+    # Independently: project the ray of output pixel (u, v) through the lens model
+    # (OpenCV order k1, k2, p1, p2, k3..k6; the calibration stores ... p2, p1).
+    k1, k2, k3, k4, k5, k6, _, _, p2, p1 = params[4:]
+    dist = np.array([k1, k2, p1, p2, k3, k4, k5, k6])
+    uv = np.array([[256, 256], [100, 120], [400, 300], [60, 450]], float)
+    rays = np.c_[(uv[:, 0] - cam.cx) / cam.fx, (uv[:, 1] - cam.cy) / cam.fy, np.ones(len(uv))]
+    src, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), cam.matrix, dist)
+    src = src.reshape(-1, 2)
+    for (u, v), (su, sv) in zip(uv.astype(int), src):
+        # The pixels that hold this value (it repeats every 60000): one is where it came from.
+        rows, cols = np.divmod(np.flatnonzero(source[0].ravel() == out[v, u]), w)
+        assert np.min(np.hypot(cols - su, rows - sv)) <= 1.0, (u, v)
+    assert not np.array_equal(out, source[0])
+    # Forced off: the frame as recorded.
+    assert np.array_equal(open_sequence(path, undistort=False).raw_depth(0), source[0])

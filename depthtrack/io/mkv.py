@@ -96,8 +96,8 @@ def mode_intrinsics(params, mode: str, sensor=(1024, 1024), path=None):
                                "depth modes are defined for 1024 x 1024")
     (bw, bh), (ox, oy), (w, h) = DEPTH_MODES[mode]
     cx_n, cy_n, fx_n, fy_n = params[:4]
-    camera = Camera(width=w, height=h, fx=fx_n * bw, fy=fy_n * bh,
-                    cx=cx_n * bw - ox - 0.5, cy=cy_n * bh - oy - 0.5)
+    camera = Camera(width=w, height=h, fx=float(fx_n * bw), fy=float(fy_n * bh),
+                    cx=float(cx_n * bw - ox - 0.5), cy=float(cy_n * bh - oy - 0.5))
     k1, k2, k3, k4, k5, k6, _codx, _cody, p2, p1 = params[4:14]
     return camera, np.array([k1, k2, p1, p2, k3, k4, k5, k6], dtype=float)
 
