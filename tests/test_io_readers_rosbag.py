@@ -84,7 +84,7 @@ def test_depth_topic_choice(tmp_path):
     # cam_b has no camera info of its own; the nearest one (sharing no more than "/") is
     # still the only one, so it is used.
     assert seq.camera == CAMERA and seq.depth(2)[5, 5] == pytest.approx(1.5)
-    with pytest.raises(InputError, match="no sensor_msgs/Image topic '/nope'"):
+    with pytest.raises(InputError, match="no image topic '/nope'"):
         open_sequence(two, topic="/nope")
     # On the command line: one line, exit 2.
     assert main(["convert", str(two), str(tmp_path / "out"), "--quiet"]) == 2
@@ -123,3 +123,30 @@ def test_bag_tracks_to_the_same_joints_as_the_png_directory(synthetic, tmp_path)
     assert np.isfinite(ref.joints).any()
     assert np.array_equal(np.isnan(ref.joints), np.isnan(got.joints))
     assert np.nanmax(np.abs(ref.joints - got.joints)) == 0.0
+
+
+def test_compressed_depth_topics(tmp_path):
+    from rosbag_writers import QUANT_A, QUANT_B
+
+    rng = np.random.default_rng(2)
+    raw = rng.integers(0, 6000, (3, 24, 32)).astype(np.uint16)
+    bag = write_ros1_bag(tmp_path / "c16.bag", raw, CAMERA, topic="/camera/depth/image_raw/compressedDepth",
+                         compressed=True)
+    seq = open_sequence(bag)
+    assert seq.meta["source"]["compressed"] and seq.camera == CAMERA
+    assert all(np.array_equal(seq.raw_depth(i), raw[i]) for i in range(3))   # PNG: lossless
+    # 32FC1 travels as quantised inverse depth: z = A / (v - B), v = 0 = no reading.
+    metres = rng.uniform(0.5, 4.0, (2, 24, 32)).astype(np.float32)
+    metres[:, 0] = np.nan
+    bag = write_ros1_bag(tmp_path / "c32.bag", metres, CAMERA, encoding="32FC1",
+                         topic="/camera/depth/image_raw/compressedDepth", compressed=True)
+    seq = open_sequence(bag)
+    v = np.rint(QUANT_A / metres[1, 1:] + QUANT_B)
+    expected = QUANT_A / (v - QUANT_B)
+    d = seq.depth(1)
+    assert np.all(d[0] == 0) and np.allclose(d[1:], expected, rtol=1e-5)
+    assert np.abs(d[1:] - metres[1, 1:]).max() < 4.0 ** 2 / QUANT_A / 2 + 1e-3   # the codec's own step
+    # A raw depth topic beside its compressed twin: the raw one is chosen.
+    both = write_ros1_bag(tmp_path / "both.bag", raw, CAMERA, topic="/camera/depth/image_raw/compressedDepth",
+                          compressed=True, extra_image_topics=("/camera/depth/image_raw",))
+    assert open_sequence(both).meta["source"]["topic"] == "/camera/depth/image_raw"

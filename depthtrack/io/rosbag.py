@@ -2,10 +2,13 @@
 directories), read with ``rosbags`` (pure Python, no ROS installation).
 
 Depth is a ``sensor_msgs/Image`` topic per REP 118: ``16UC1`` (or ``mono16``) in
-millimetres by default, 0 = no reading, or ``32FC1`` in metres, NaN = no reading. The
-topic is found automatically when exactly one image topic is named like depth (or,
-failing that, exactly one image topic has a depth encoding); otherwise ``topic`` names
-it, and an ambiguous bag is refused with the candidates listed.
+millimetres by default, 0 = no reading, or ``32FC1`` in metres, NaN = no reading; or a
+``sensor_msgs/CompressedImage`` from ``compressed_depth_image_transport``
+(``"16UC1; compressedDepth png"``, or ``32FC1`` as quantised inverse depth; the RVL
+variant is refused). The topic is found automatically: of the image topics whose first
+message holds depth, the only one; among several, the only one named like depth, then
+the only uncompressed one; otherwise ``topic`` names it, and an ambiguous bag is refused
+with the candidates listed.
 
 Intrinsics come from the ``sensor_msgs/CameraInfo`` topic that shares the longest path
 prefix with the depth topic (RealSense: ``.../Depth_0/image/data`` pairs with
@@ -20,6 +23,7 @@ Timestamps are the bag's record times, in seconds from the first depth message.
 from __future__ import annotations
 
 import contextlib
+import struct
 import tempfile
 from pathlib import Path
 
@@ -31,6 +35,7 @@ from .arrays import RecordingSequence
 from .registry import Reader, fps_from_timestamps, parse_intrinsics, positive
 
 IMAGE = "sensor_msgs/msg/Image"
+COMPRESSED = "sensor_msgs/msg/CompressedImage"
 CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
 #: Image encodings we read as depth, and their numpy types (little-endian; swapped per message).
 DEPTH_ENCODINGS = {"16UC1": "<u2", "mono16": "<u2", "32FC1": "<f4"}
@@ -80,8 +85,46 @@ def _field(msg, *names):
     raise AttributeError(names[0])
 
 
+def depth_encoding(msg):
+    """The depth encoding of an Image or compressedDepth CompressedImage message, else None."""
+    if hasattr(msg, "encoding"):
+        return msg.encoding if msg.encoding in DEPTH_ENCODINGS else None
+    fmt = str(getattr(msg, "format", ""))
+    encoding = fmt.split(";")[0].strip()
+    if "compresseddepth" in fmt.lower() and encoding in ("16UC1", "32FC1"):
+        return encoding
+    return None
+
+
+def _decode_compressed_depth(msg) -> np.ndarray:
+    # compressed_depth_image_transport: a 12-byte header (int32 format, float32 depthParam[2])
+    # then a 16-bit PNG: millimetres for 16UC1; for 32FC1 the quantised inverse depth
+    # v = A / z + B, so z = A / (v - B), v = 0 = no reading.
+    import cv2
+
+    fmt = str(msg.format)
+    if "rvl" in fmt.lower():
+        raise ValueError(f"compressedDepth RVL images are not supported ({fmt!r}); republish as png")
+    data = np.asarray(msg.data, dtype=np.uint8)
+    if data.size <= 12:
+        raise ValueError("compressedDepth message too short")
+    _, quant_a, quant_b = struct.unpack("<iff", data[:12].tobytes())
+    image = cv2.imdecode(data[12:], cv2.IMREAD_UNCHANGED)
+    if image is None or image.dtype != np.uint16 or image.ndim != 2:
+        raise ValueError("compressedDepth data is not a 16-bit single-channel PNG")
+    if fmt.split(";")[0].strip() == "16UC1":
+        return image
+    with np.errstate(divide="ignore"):
+        depth = np.float32(quant_a) / (image.astype(np.float32) - np.float32(quant_b))
+    depth[image == 0] = np.nan
+    return depth
+
+
 def image_to_array(msg) -> np.ndarray:
-    """(H, W) uint16 raw or float32 metres from a ``sensor_msgs/Image`` depth message."""
+    """(H, W) uint16 raw or float32 metres from a depth ``sensor_msgs/Image`` or a
+    ``compressedDepth`` ``sensor_msgs/CompressedImage`` message."""
+    if not hasattr(msg, "encoding"):
+        return _decode_compressed_depth(msg)
     encoding = msg.encoding
     dtype = np.dtype(DEPTH_ENCODINGS[encoding])
     if msg.is_bigendian:
@@ -126,9 +169,9 @@ class RosbagSequence(RecordingSequence):
                     skip -= 1
                     continue
                 msg = reader.deserialize(raw, conn.msgtype)
-                if msg.encoding != self.encoding:
+                if depth_encoding(msg) != self.encoding:
                     raise InputError(self.path, f"topic {self.topic} changes encoding from "
-                                                f"{self.encoding} to {msg.encoding} at frame {start + len(frames)}")
+                                                f"{self.encoding} at frame {start + len(frames)}")
                 frame = image_to_array(msg)
                 if frame.shape != self.camera.shape:
                     raise InputError(self.path, f"topic {self.topic}: frame {start + len(frames)} is "
@@ -143,26 +186,30 @@ class RosbagSequence(RecordingSequence):
 
 
 def _pick_topic(path, reader, images: dict, topic):
+    """The depth topic: ``topic``, else the only image topic holding depth; among several,
+    the only one named like depth, else the only uncompressed one; else refused."""
     if topic is not None:
         if topic not in images:
             listed = ", ".join(sorted(images)) or "none"
-            raise InputError(path, f"no sensor_msgs/Image topic {topic!r} (image topics: {listed})")
+            raise InputError(path, f"no image topic {topic!r} (image topics: {listed})")
         return topic
     if not images:
-        raise InputError(path, "no sensor_msgs/Image topic in the bag")
-    named = [t for t in images if "depth" in t.lower()]
-    if len(named) == 1:
-        return named[0]
-    pool = named or list(images)
-    encoded = []
-    for t in pool:
-        msg = _first(reader, images[t])
-        if msg is not None and msg.encoding in DEPTH_ENCODINGS and msg.encoding != "mono16":
-            encoded.append(t)
-    if len(encoded) == 1:
-        return encoded[0]
-    candidates = encoded or pool
-    raise InputError(path, f"several possible depth topics, choose one with --topic: {', '.join(sorted(candidates))}")
+        raise InputError(path, "no sensor_msgs/Image or CompressedImage topic in the bag")
+    depth = []
+    for t, conns in images.items():
+        msg = _first(reader, conns)
+        if msg is not None and depth_encoding(msg) is not None:
+            depth.append(t)
+    if not depth:
+        raise InputError(path, f"no depth image topic (16UC1, 32FC1 or compressedDepth) among "
+                               f"{', '.join(sorted(images))}")
+    for prefer in (lambda t: "depth" in t.lower(), lambda t: images[t][0].msgtype == IMAGE):
+        if len(depth) == 1:
+            break
+        depth = [t for t in depth if prefer(t)] or depth
+    if len(depth) == 1:
+        return depth[0]
+    raise InputError(path, f"several depth topics, choose one with --topic: {', '.join(sorted(depth))}")
 
 
 def _pick_camera_info(path, infos: dict, topic, camera_info):
@@ -220,7 +267,7 @@ def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units
     with open_bag(path) as reader:
         images, infos = {}, {}
         for conn in reader.connections:
-            if conn.msgtype == IMAGE:
+            if conn.msgtype in (IMAGE, COMPRESSED):
                 images.setdefault(conn.topic, []).append(conn)
             elif conn.msgtype == CAMERA_INFO:
                 infos.setdefault(conn.topic, []).append(conn)
@@ -228,12 +275,14 @@ def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units
         first = _first(reader, images[topic])
         if first is None:
             raise InputError(path, f"topic {topic} has no messages")
-        if first.encoding not in DEPTH_ENCODINGS:
-            raise InputError(path, f"topic {topic} is {first.encoding}, not depth "
-                                   f"({', '.join(DEPTH_ENCODINGS)})")
-        width, height = int(first.width), int(first.height)
-        source = {"format": "rosbag", "input": str(path), "topic": topic, "encoding": first.encoding,
-                  "frame_id": str(first.header.frame_id)}
+        encoding = depth_encoding(first)
+        if encoding is None:
+            what = getattr(first, "encoding", None) or getattr(first, "format", "?")
+            raise InputError(path, f"topic {topic} is {what}, not depth "
+                                   f"({', '.join(DEPTH_ENCODINGS)} or compressedDepth)")
+        height, width = image_to_array(first).shape
+        source = {"format": "rosbag", "input": str(path), "topic": topic, "encoding": encoding,
+                  "compressed": not hasattr(first, "encoding"), "frame_id": str(first.header.frame_id)}
         info_topic = _pick_camera_info(path, infos, topic, camera_info)
         if intrinsics is not None:
             camera = parse_intrinsics(intrinsics, width, height, path)
@@ -248,7 +297,7 @@ def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units
             source["camera_info"] = info_topic
             source["distortion_model"] = str(info.distortion_model)
             source["distortion"] = [float(d) for d in _field(info, "d", "D")]
-        if first.encoding == "32FC1":
+        if encoding == "32FC1":
             if depth_units is not None:
                 raise InputError(path, f"topic {topic} is 32FC1 (metres): --depth-units applies to 16-bit depth only")
             scale = 0.001  # the quantum raw_depth and convert use
@@ -256,12 +305,12 @@ def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units
             scale = positive(depth_units, "depth units", path)
         else:
             scale = _realsense_depth_units(reader, topic) or 0.001
-        source["depth_units"] = scale if first.encoding != "32FC1" else None
+        source["depth_units"] = scale if encoding != "32FC1" else None
         stamps = _stamps(reader, images[topic])
     t = (stamps - stamps[0]) / 1e9
     rate = positive(fps, "fps", path) if fps is not None else fps_from_timestamps(t, 30.0)
     source["start_time"] = float(stamps[0]) / 1e9
-    return RosbagSequence(path, topic, stamps, first.encoding, camera, rate, scale, {"source": source})
+    return RosbagSequence(path, topic, stamps, encoding, camera, rate, scale, {"source": source})
 
 
 def _is_ros1(path, head) -> bool:
