@@ -7,7 +7,6 @@ import pytest
 from depthtrack import Camera, InputError
 from depthtrack.cli import main
 from depthtrack.io.registry import open_sequence
-from depthtrack.io.sequence import write_sequence
 
 from rosbag_writers import write_ros1_bag, write_ros2_bag
 

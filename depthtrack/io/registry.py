@@ -150,7 +150,8 @@ def _load_builtins() -> None:
     from . import mkv, rosbag, sequence_readers, tum
 
     builtin = {}
-    for module in (sequence_readers, tum, rosbag, mkv):
+    # Registration order; the last is asked first: our own directory and .npz.
+    for module in (mkv, rosbag, tum, sequence_readers):
         builtin.update(module.READERS)
     # Built-ins go first in the order, so that anything registered already (or later) wins.
     others = dict(_READERS)
