@@ -234,10 +234,13 @@ def choose_reader(path, reader: Optional[str] = None) -> Reader:
     if reader is not None:
         for r in known:
             if r.name == reader:
-                return r
-        raise InputError(None, f"unknown reader {reader!r}; known: {', '.join(r.name for r in known)}")
+                break
+        else:
+            raise InputError(None, f"unknown reader {reader!r}; known: {', '.join(r.name for r in known)}")
     if not path.exists():
         raise InputError(path, "no such file or directory")
+    if reader is not None:
+        return r
     head = _head(path)
     suffix = path.suffix.lower()
     if suffix and not path.is_dir():
