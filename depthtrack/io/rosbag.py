@@ -256,7 +256,13 @@ def _realsense_depth_units(reader, topic):
 
 
 def _stamps(reader, connections) -> np.ndarray:
-    return np.array(sorted(t for _, t, _ in reader.messages(connections=connections)), dtype=np.int64)
+    """(F,) int64 record times (ns) of the messages on ``connections``, in order."""
+    try:
+        # ROS 1: the bag's own index has them, so opening does not read every frame.
+        times = [entry.time for c in connections for entry in c.owner.indexes[c.id]]
+    except (AttributeError, KeyError, TypeError):
+        times = [t for _, t, _ in reader.messages(connections=connections)]
+    return np.array(sorted(times), dtype=np.int64)
 
 
 def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units=None, fps=None):
