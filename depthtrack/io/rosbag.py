@@ -268,7 +268,10 @@ def _stamps(reader, connections) -> np.ndarray:
 def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units=None, fps=None):
     """Open the depth topic of a ROS 1 ``.bag`` or a ROS 2 bag directory (module docstring)."""
     path = Path(path)
-    if path.is_file() and path.suffix.lower() in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
+    if path.is_file() and path.suffix.lower() != ".bag" and not _is_ros1(path, _head(path)):
+        if not (path.parent / "metadata.yaml").is_file():
+            raise InputError(path, "a ROS 2 bag file is read with its bag directory's metadata.yaml, "
+                                   "which is not beside it")
         path = path.parent
     with open_bag(path) as reader:
         images, infos = {}, {}
@@ -319,6 +322,11 @@ def open_rosbag(path, topic=None, camera_info=None, intrinsics=None, depth_units
     return RosbagSequence(path, topic, stamps, encoding, camera, rate, scale, {"source": source})
 
 
+def _head(path: Path) -> bytes:
+    with open(path, "rb") as f:
+        return f.read(len(_BAG_MAGIC))
+
+
 def _is_ros1(path, head) -> bool:
     return head.startswith(_BAG_MAGIC)
 
@@ -327,8 +335,9 @@ def _is_ros2(path, head) -> bool:
     if path.is_dir():
         return (path / "metadata.yaml").is_file() and any(
             p.suffix in (".db3", ".mcap") for p in path.iterdir())
-    return (head.startswith(_MCAP_MAGIC) or head.startswith(b"SQLite format 3\0")) \
-        and (path.parent / "metadata.yaml").is_file()
+    # A bare .mcap is claimed too, so that its error says what is missing.
+    return head.startswith(_MCAP_MAGIC) or (
+        head.startswith(b"SQLite format 3\0") and (path.parent / "metadata.yaml").is_file())
 
 
 _OPTIONS = ("topic", "camera_info", "intrinsics", "depth_units", "fps")
