@@ -22,6 +22,7 @@ from .likelihood import LikelihoodParams
 from .render import FrameRenderer, TileRenderer, gl_context
 from .io import (BvhMotion, Sequence, Track, import_c3d_markers, open_sequence, read_bvh,
                  read_track, write_bvh, write_sequence, write_track)
+from .io import DepthSequence, Reader, convert_sequence, register_reader, sequence_from_arrays
 from .motion.retarget import resample_poses, retarget
 from .synth import MARKER_NAMES, ToFNoise, procedural_motion, synthesize_bvh, synthesize_procedural
 from .detect import detect_parts, geodesic_extrema, segment_foreground
@@ -34,7 +35,8 @@ __version__ = "0.1.0"
 __all__ = ["JOINT_NAMES", "JOINT_INDEX", "InputError", "Camera", "BodyModel", "LikelihoodParams",
            "TileRenderer", "FrameRenderer", "gl_context", "BvhMotion", "Sequence", "Track",
            "open_sequence", "write_sequence", "read_bvh", "write_bvh", "read_track", "write_track",
-           "import_c3d_markers", "retarget", "resample_poses", "MARKER_NAMES", "ToFNoise",
+           "import_c3d_markers", "DepthSequence", "Reader", "register_reader", "sequence_from_arrays",
+           "convert_sequence", "retarget", "resample_poses", "MARKER_NAMES", "ToFNoise",
            "procedural_motion", "synthesize_bvh", "synthesize_procedural", "segment_foreground",
            "geodesic_extrema", "detect_parts", "Tracker", "TrackerSettings", "run_tracking",
            "KalmanFilter", "ParticleFilter", "UnscentedKalmanFilter", "__version__"]

@@ -6,6 +6,7 @@ import json
 import sys
 
 from ..errors import InputError
+from .reader_options import add_reader_options, reader_options
 
 
 _EPILOG = """examples:
@@ -29,7 +30,8 @@ def register(subparsers) -> None:
                     "sequences (each sequence weighing the same).",
         epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("sequences", nargs="+", metavar="SEQ",
-                   help="sequence directory (or .npz) with groundtruth/joints.csv and/or markers.csv")
+                   help="sequence directory (or .npz, or any readable recording) with ground-truth "
+                        "joints and/or markers")
     p.add_argument("--methods", default=None,
                    help="comma-separated tracking methods from hc, ep, hc+ep (default: all three; "
                         "not with --track)")
@@ -44,6 +46,7 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true",
                    help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout')
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_reader_options(p)
     p.set_defaults(func=run)
 
 
@@ -56,7 +59,7 @@ def run(args) -> int:
                                "its summary.json)")
     methods = METHODS if args.methods is None else args.methods.split(",")
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
-                          track_dirs=args.track, quiet=args.quiet,
+                          track_dirs=args.track, quiet=args.quiet, open_options=reader_options(args),
                           log=None if args.quiet else print_line)
     data = evaluation.to_dict()
     written = write_report(evaluation, args.report) if args.report else None

@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
+from .reader_options import add_reader_options, reader_options
 
 _EPILOG = """methods (the ToF paper's experiments):
   hc      model-based hill climbing only
@@ -16,6 +17,11 @@ _EPILOG = """methods (the ToF paper's experiments):
 examples:
   depthtrack track seq_walk -o track_walk
   depthtrack track seq_walk -o track_walk --method hc --likelihood pixel --overlay walk.mp4
+  depthtrack track recording.mkv -o track_kinect
+  depthtrack track realsense.bag -o track_rs --topic /device_0/sensor_0/Depth_0/image/data
+
+SEQ is any readable recording: a sequence directory or .npz, an Azure Kinect / Femto .mkv,
+a ROS 1 .bag, a ROS 2 bag directory, a TUM RGB-D folder (see "reading recordings").
 
 OUT gets joints.csv, poses.npz, track.bvh and summary.json (method, settings, body height
 and where it came from, timings per stage, frames per second). The body height is read
@@ -34,7 +40,8 @@ def register(subparsers) -> None:
         description="Track the body through a depth sequence: automatic initialisation on the\n"
                     "first frame, then per frame the MAP pose under the motion prior.",
         epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("sequence", metavar="SEQ", help="depth sequence directory or .npz")
+    p.add_argument("sequence", metavar="SEQ",
+                   help="depth sequence directory or .npz, or any readable recording")
     p.add_argument("-o", "--out", required=True, metavar="OUT", help="output track directory")
     p.add_argument("--method", choices=("hc", "ep", "hc+ep"), default="hc+ep",
                    help="search method (default hc+ep)")
@@ -46,6 +53,7 @@ def register(subparsers) -> None:
                    help="ABLATION ONLY: start from a pose fitted to the ground-truth joints of "
                         "frame 0 instead of the automatic initialisation (recorded in summary.json)")
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
+    add_reader_options(p)
     p.set_defaults(func=run)
 
 
@@ -67,7 +75,7 @@ def run(args) -> int:
     overlay = Path(args.overlay) if args.overlay else None
     if overlay is not None and overlay.suffix.lower() not in OVERLAY_SUFFIXES:
         raise InputError(overlay, "overlay must end in .mp4 or .gif")
-    seq = open_sequence(args.sequence)
+    seq = open_sequence(args.sequence, **reader_options(args))
     t0 = time.perf_counter()
     with Progress(len(seq), "frames", quiet=args.quiet) as progress:
         result, body, summary = run_tracking(seq, method=args.method, likelihood=args.likelihood,

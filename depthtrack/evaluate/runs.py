@@ -119,7 +119,7 @@ def sequence_name(path) -> str:
     return path.resolve().name or str(path)
 
 
-def open_with_ground_truth(path):
+def open_with_ground_truth(path, **options):
     """Open a sequence and check that it carries ground truth to score against.
 
     Raises
@@ -129,7 +129,7 @@ def open_with_ground_truth(path):
     """
     from ..io.sequence import open_sequence
 
-    seq = open_sequence(path)
+    seq = open_sequence(path, **options)
     joints, markers = seq.joints, seq.markers
     has_joints = joints is not None and np.isfinite(joints).all(axis=-1).any()
     has_markers = markers is not None and np.isfinite(markers).all(axis=-1).any()
@@ -258,7 +258,7 @@ def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool =
 
 
 def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", track_dirs=None,
-             quiet: bool = True, log=None) -> Evaluation:
+             quiet: bool = True, log=None, open_options=None) -> Evaluation:
     """Track and score sequences (or score existing tracks).
 
     Parameters
@@ -276,6 +276,8 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
         No progress on stderr.
     log : callable(str) or None
         Receives one line per finished (sequence, method).
+    open_options : dict or None
+        Reader options for :func:`depthtrack.io.registry.open_sequence` (``topic``, ...).
 
     Raises
     ------
@@ -292,7 +294,7 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
     for p in sequence_paths:
         key = str(p.resolve())
         if key not in sequences:
-            sequences[key] = open_with_ground_truth(p)
+            sequences[key] = open_with_ground_truth(p, **(open_options or {}))
     names = {}
     for p in sequence_paths:
         name = sequence_name(p)

@@ -158,9 +158,9 @@ def import_c3d_markers(c3d_path, sequence_dir, lab_to_camera=None, time_offset: 
     pathlib.Path of the CSV written.
     """
     from .atomic import write_text_atomic
-    from .sequence import format_points_csv, open_sequence
+    from .sequence import format_points_csv, open_native
 
-    seq = open_sequence(sequence_dir)
+    seq = open_native(sequence_dir)  # our own directory: the markers are written into it
     if seq._frame_files is None:
         raise InputError(sequence_dir, "markers can be imported into a sequence directory only, not a .npz")
     markers = read_c3d_markers(c3d_path, units=units)

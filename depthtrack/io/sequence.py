@@ -294,6 +294,15 @@ class Sequence:
         """Seconds covered by the frames."""
         return self._n / self.fps
 
+    @property
+    def timestamps(self) -> np.ndarray:
+        """(F,) float seconds: the source recording's times when ``convert`` kept them, else i / fps."""
+        source = self.meta.get("source")
+        kept = source.get("timestamps") if isinstance(source, dict) else None
+        if isinstance(kept, list) and len(kept) == self._n:
+            return np.asarray(kept, dtype=float)
+        return np.arange(self._n) / self.fps
+
     def _npz_data(self):
         if self._npz is None:
             with np.load(self._npz_path, allow_pickle=False) as data:
@@ -444,8 +453,8 @@ def _open_npz(path: Path) -> Sequence:
     return seq
 
 
-def open_sequence(path) -> Sequence:
-    """Open a depth sequence directory or ``.npz`` file.
+def open_native(path) -> Sequence:
+    """Open a depth sequence directory or ``.npz`` file (our own formats only).
 
     Validates everything that can be checked cheaply: sequence.json, frame numbering,
     every PNG header (16-bit single channel, camera size). Pixels and ground truth are
@@ -466,6 +475,14 @@ def open_sequence(path) -> Sequence:
     if not path.exists():
         raise InputError(path, "no such sequence directory or .npz file")
     raise InputError(path, "not a sequence directory or .npz file")
+
+
+def open_sequence(path, **options):
+    """Open any readable depth recording: our directory or ``.npz``, or what a reader in
+    :mod:`depthtrack.io.registry` reads (``.mkv``, ROS bags, TUM folders, plugins)."""
+    from .registry import open_sequence as open_any
+
+    return open_any(path, **options)
 
 
 def _check_points(name, points, n_frames, n_points=None):
@@ -576,5 +593,5 @@ def write_points_csv(path, points, names, kind: str) -> None:
     write_text_atomic(path, format_points_csv(points, names, kind))
 
 
-__all__ = ["Sequence", "open_sequence", "write_sequence", "read_points_csv", "format_points_csv",
+__all__ = ["Sequence", "open_sequence", "open_native", "write_sequence", "read_points_csv", "format_points_csv",
            "write_points_csv", "png_header", "depth_to_raw"]
