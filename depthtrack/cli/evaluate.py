@@ -6,6 +6,7 @@ import json
 import sys
 
 from ..errors import InputError
+from .args import add_force, check_output
 
 
 _EPILOG = """examples:
@@ -44,6 +45,7 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true",
                    help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout')
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_force(p, "the --report directory")
     p.set_defaults(func=run)
 
 
@@ -54,6 +56,7 @@ def run(args) -> int:
     if args.track is not None and args.methods is not None:
         raise InputError(None, "--methods and --track exclude each other (a track's method is in "
                                "its summary.json)")
+    check_output(args, "report", inputs=[*args.sequences, *(args.track or ())])
     methods = METHODS if args.methods is None else args.methods.split(",")
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
                           track_dirs=args.track, quiet=args.quiet,
