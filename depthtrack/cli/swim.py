@@ -248,7 +248,12 @@ def run_reconstruct(args) -> int:
     _check_out(args, "output", [args.markings, args.lengths], "file", "swim reconstruct")
     markings = read_markings(args.markings)
     lengths = read_lengths(args.lengths)
-    joints, info = reconstruct_markings(markings, lengths, stroke=args.stroke)
+    try:
+        joints, info = reconstruct_markings(markings, lengths, stroke=args.stroke)
+    except InputError as exc:                   # the markings' content is at fault: name the file
+        if exc.path is not None:
+            raise
+        raise InputError(args.markings, exc.problem) from None
     write_joints_csv(args.output, joints, markings.frames)
     print(f"{len(joints)} frames reconstructed ({info}): {args.output}", file=sys.stderr)
     return 0

@@ -14,6 +14,7 @@ PNG headers are read when the sequence is opened. A ``.npz`` is read whole on fi
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -79,6 +80,23 @@ def _check_png_chunks(path, data: bytes) -> None:
         pos = end
 
 
+@contextlib.contextmanager
+def _stderr_silenced():
+    """Send file descriptor 2 to /dev/null for the duration (C libraries write there)."""
+    try:
+        saved = os.dup(2)
+    except OSError:
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def _read_png16(path) -> np.ndarray:
     import cv2
 
@@ -87,7 +105,8 @@ def _read_png16(path) -> np.ndarray:
     except OSError as exc:
         raise InputError(path, f"cannot read ({exc.strerror or exc})") from None
     _check_png_chunks(path, data)
-    raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    with _stderr_silenced():                    # libpng reports bad data on stderr too
+        raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if raw is None:
         raise InputError(path, "cannot decode PNG")
     if raw.dtype != np.uint16 or raw.ndim != 2:
@@ -149,10 +168,10 @@ META_RANGES = {"fps": (0.1, 1000.0), "depth_scale": (1e-6, 1.0), "width": (1, 16
                "subject.height_m": (0.5, 2.5)}
 
 
-def _in_range(value, what, path):
+def _in_range(value, what, path, shown=None):
     lo, hi = META_RANGES[what]
     if not lo <= value <= hi:
-        raise InputError(path, f"{what} is {value!r}, allowed {lo:g} to {hi:g}")
+        raise InputError(path, f"{shown or what} is {value!r}, allowed {lo:g} to {hi:g}")
     return value
 
 
@@ -164,7 +183,7 @@ def _check_camera(cam: dict, path) -> None:
         v = cam[key]
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v != int(v):
             raise InputError(path, f"camera.{key} must be a whole number of pixels, not {v!r}")
-        _in_range(int(v), key, path)
+        _in_range(int(v), key, path, f"camera.{key}")
     for key in ("fx", "fy", "cx", "cy"):
         if key not in cam:
             continue
