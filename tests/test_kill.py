@@ -178,3 +178,30 @@ def test_kill_during_track_leaves_no_output_and_the_next_run_succeeds(tmp_path):
     assert not stale.exists() and not temporaries(out)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 6 and read_marker(out)["command"] == "track"
+
+
+def test_a_failed_overlay_leaves_the_track_complete_and_unnamed(tmp_path, monkeypatch):
+    """Overlay after the track: on failure the track stays whole and its summary names no overlay."""
+    import errno
+
+    from depthtrack.body import BodyModel
+    from depthtrack.cli import track as track_cli
+    from depthtrack.errors import InputError
+    from depthtrack.evaluate import overlay as overlay_module
+    from depthtrack.io.track_output import read_track, write_track
+
+    body = BodyModel.default(height=1.75)
+    poses = np.tile(body.default_pose((0.0, 0.0, 3.0)), (3, 1))
+    out = write_track(tmp_path / "track", body.joint_positions(poses), poses, body.pose_names, body, 25.0,
+                      {"method": "hc"})
+
+    def full_disk(path, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+    monkeypatch.setattr(overlay_module, "write_overlay", full_disk)
+    with pytest.raises(InputError, match="no space left on device.*track in .* is complete"):
+        track_cli._add_overlay(out, tmp_path / "v.mp4", None, poses, body, {})
+    assert "overlay" not in read_track(out).summary and not (tmp_path / "v.mp4").exists()
+
+    monkeypatch.setattr(overlay_module, "write_overlay", lambda path, *a, **k: Path(path))
+    track_cli._add_overlay(out, tmp_path / "v.mp4", None, poses, body, {})
+    assert read_track(out).summary["overlay"] == str(tmp_path / "v.mp4")

@@ -10,6 +10,7 @@ import importlib
 import sys
 
 from ..errors import InputError
+from ..render.context import GLUnavailableError
 from .args import Parser, print_error
 
 #: Modules under ``depthtrack.cli`` that contribute commands, in ``--help`` order.
@@ -53,6 +54,9 @@ def main(argv=None) -> int:
         from ..io.atomic import describe_os_error
         where = f"{exc.filename}: " if exc.filename else ""
         print_error(args.command, f"{where}{describe_os_error(exc)}")
+        return 1
+    except GLUnavailableError as exc:          # the machine lacks headless OpenGL: say what to install
+        print_error(args.command, exc)
         return 1
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
