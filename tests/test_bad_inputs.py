@@ -607,3 +607,20 @@ def _fresh(base, key):
         import shutil
         shutil.rmtree(root / "cases", ignore_errors=True)
     return root
+
+
+def test_read_only_output_place_is_refused_before_work(tmp_path, capsys):
+    """A directory we may not write in (root may write anywhere: then there is nothing to test)."""
+    if os.geteuid() == 0:
+        pytest.skip("running as root, which writes into read-only directories; the same refusal is "
+                    "covered by the output-under-a-file cases")
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        assert main(["synth", "--procedural", "wave", str(locked / "seq")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "locked" in err and "cannot write" in err
+        assert os.listdir(locked) == []
+    finally:
+        locked.chmod(0o700)
