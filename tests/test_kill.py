@@ -165,11 +165,14 @@ def test_kill_during_track_leaves_no_output_and_the_next_run_succeeds(tmp_path):
     assert made.wait() == 0, made.communicate()
     out = tmp_path / "track"
     proc = cli("track", seq, "-o", out, "--method", "hc", "--quiet")
-    time.sleep(3.0)                                          # tracking (the output comes at the end)
-    if proc.poll() is None:
-        os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    assert proc.returncode == -signal.SIGKILL, "tracking ended before the kill; use a longer sequence"
+
+    def tracking():                                          # GL is up: the tracker is at work
+        try:
+            return "libEGL" in Path(f"/proc/{proc.pid}/maps").read_text()
+        except OSError:
+            return False
+    kill_when(proc, tracking)
+    assert proc.returncode == -signal.SIGKILL
     assert not out.exists() and not temporaries(out)
     stale = stale_temporary(out, dead_pid())                  # as a kill while writing leaves it
     (stale / "track").mkdir()
