@@ -501,6 +501,8 @@ for _opt, _val in [("--threads", "0"), ("--smooth", "-1"), ("--derivative", "d9"
                    ("--frames", "0"), ("--step", "-2"), ("--noise", "nan"), ("--seed", "-5"),
                    ("--temporal-sigma", "0"), ("--jitter", "-1")]:
     _arg_case(f"swim{_opt}={_val}", [*_SWIM, f"{_opt}={_val}"], _opt)
+for _val in ("1e300", "-1", "nan", "0"):
+    _arg_case(f"synth-units={_val}", ["synth", "{bvh}", "{out}", f"--units={_val}"], "motion.bvh")
 _arg_case("swim-cycle-starts", [*_SWIM, "--cycle-starts", "5,3,99999"], "--cycle-starts")
 _arg_case("swim-particles", [*_SWIM, "--particles", "0"], "--particles")
 _arg_case("swim-sigma", [*_SWIM, "--sigma", "-1"], "--sigma")
