@@ -14,7 +14,6 @@ PNG headers are read when the sequence is opened. A ``.npz`` is read whole on fi
 """
 from __future__ import annotations
 
-import contextlib
 import csv
 import io
 import json
@@ -22,7 +21,6 @@ import math
 import os
 import re
 import struct
-import zlib
 from pathlib import Path
 
 import numpy as np
@@ -31,8 +29,9 @@ from ..camera import Camera
 from ..contract import JOINT_NAMES, SEQUENCE_FORMAT
 from ..errors import InputError
 from .atomic import atomic_path
+from .validation import (PNG_SIGNATURE as _PNG_SIGNATURE, check_camera_fields, check_covers, check_png_chunks,
+                         finite_positive, in_range, stderr_silenced)
 
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _FRAME_NAME = re.compile(r"^(\d+)\.png$")
 #: Largest raw value a 16-bit PNG holds.
 MAX_RAW = 65535
@@ -58,45 +57,6 @@ def png_header(path):
     return width, height, bit_depth, colour_type
 
 
-def _check_png_chunks(path, data: bytes) -> None:
-    """Walk the chunks (length, type, CRC) up to IEND, so that a truncated or corrupt PNG is
-    refused here in one line instead of by libpng, which also prints to stderr."""
-    if data[:8] != _PNG_SIGNATURE:
-        raise InputError(path, "not a PNG file")
-    pos, n = 8, len(data)
-    while True:
-        if pos + 12 > n:
-            raise InputError(path, f"truncated PNG ({n} bytes, no IEND chunk)")
-        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
-        end = pos + 12 + length
-        if end > n:
-            raise InputError(path, f"truncated PNG (chunk {kind.decode('latin-1')!r} ends past the "
-                                   f"file's {n} bytes)")
-        crc = struct.unpack(">I", data[end - 4:end])[0]
-        if zlib.crc32(data[pos + 4:end - 4]) != crc:
-            raise InputError(path, f"corrupt PNG (bad checksum in chunk {kind.decode('latin-1')!r})")
-        if kind == b"IEND":
-            return
-        pos = end
-
-
-@contextlib.contextmanager
-def _stderr_silenced():
-    """Send file descriptor 2 to /dev/null for the duration (C libraries write there)."""
-    try:
-        saved = os.dup(2)
-    except OSError:
-        yield
-        return
-    try:
-        with open(os.devnull, "wb") as null:
-            os.dup2(null.fileno(), 2)
-        yield
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-
-
 def _read_png16(path) -> np.ndarray:
     import cv2
 
@@ -104,8 +64,8 @@ def _read_png16(path) -> np.ndarray:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise InputError(path, f"cannot read ({exc.strerror or exc})") from None
-    _check_png_chunks(path, data)
-    with _stderr_silenced():                    # libpng reports bad data on stderr too
+    check_png_chunks(path, data)
+    with stderr_silenced():                    # libpng reports bad data on stderr too
         raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if raw is None:
         raise InputError(path, "cannot decode PNG")
@@ -152,54 +112,6 @@ def depth_to_raw(depth, depth_scale: float) -> np.ndarray:
 
 
 # ------------------------------------------------------------------- metadata
-def _finite_positive(value, what, path):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(path, f"{what} is not a number ({value!r})") from None
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(path, f"{what} must be a positive finite number, not {value!r}")
-    return value
-
-
-#: Allowed ranges of sequence.json fields: (low, high), both included.
-META_RANGES = {"fps": (0.1, 1000.0), "depth_scale": (1e-6, 1.0), "width": (1, 16384),
-               "height": (1, 16384), "fx": (1.0, 1e5), "fy": (1.0, 1e5),
-               "subject.height_m": (0.5, 2.5)}
-
-
-def _in_range(value, what, path, shown=None):
-    lo, hi = META_RANGES[what]
-    if not lo <= value <= hi:
-        raise InputError(path, f"{shown or what} is {value!r}, allowed {lo:g} to {hi:g}")
-    return value
-
-
-def _check_camera(cam: dict, path) -> None:
-    """Whole-pixel sizes and sane intrinsics before :class:`Camera` sees them."""
-    for key in ("width", "height"):
-        if key not in cam:
-            continue
-        v = cam[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v != int(v):
-            raise InputError(path, f"camera.{key} must be a whole number of pixels, not {v!r}")
-        _in_range(int(v), key, path, f"camera.{key}")
-    for key in ("fx", "fy", "cx", "cy"):
-        if key not in cam:
-            continue
-        v = cam[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise InputError(path, f"camera.{key} must be a finite number, not {v!r}")
-        if key in ("fx", "fy"):
-            lo, hi = META_RANGES[key]
-            if not lo <= v <= hi:
-                raise InputError(path, f"camera.{key} is {v!r} pixels, allowed {lo:g} to {hi:g}")
-    for key, size in (("cx", "width"), ("cy", "height")):
-        if key in cam and size in cam and not -cam[size] <= cam[key] <= 2 * cam[size]:
-            raise InputError(path, f"camera.{key} is {cam[key]!r}, allowed -{size} to 2 x {size} "
-                                   f"(-{cam[size]:g} to {2 * cam[size]:g})")
-
-
 def _parse_meta(text: str, path):
     try:
         meta = json.loads(text)
@@ -213,11 +125,11 @@ def _parse_meta(text: str, path):
     for key in ("fps", "depth_scale", "camera"):
         if key not in meta:
             raise InputError(path, f"missing {key!r}")
-    fps = _in_range(_finite_positive(meta["fps"], "fps", path), "fps", path)
-    depth_scale = _in_range(_finite_positive(meta["depth_scale"], "depth_scale", path), "depth_scale", path)
+    fps = in_range(finite_positive(meta["fps"], "fps", path), "fps", path)
+    depth_scale = in_range(finite_positive(meta["depth_scale"], "depth_scale", path), "depth_scale", path)
     if not isinstance(meta["camera"], dict):
         raise InputError(path, "camera must be an object")
-    _check_camera(meta["camera"], path)
+    check_camera_fields(meta["camera"], path)
     try:
         camera = Camera.from_dict(meta["camera"], path)
     except InputError as exc:
@@ -228,7 +140,7 @@ def _parse_meta(text: str, path):
         if not isinstance(subject, dict):
             raise InputError(path, "subject must be an object")
         if subject.get("height_m") is not None:
-            height = _in_range(_finite_positive(subject["height_m"], "subject.height_m", path),
+            height = in_range(finite_positive(subject["height_m"], "subject.height_m", path),
                                "subject.height_m", path)
     return meta, camera, fps, depth_scale, height
 
@@ -411,7 +323,7 @@ class Sequence:
         if self._frame_files is not None:
             if self._joints_path is not None:
                 self._joints, _ = read_points_csv(self._joints_path, self._n, "joint", JOINT_NAMES)
-                _check_covers(self._joints_path, self._joints)
+                check_covers(self._joints_path, self._joints)
             if self._markers_path is not None:
                 # sequence.json may fix the marker order; otherwise first appearance.
                 names = self.meta.get("marker_names")
@@ -422,7 +334,7 @@ class Sequence:
             data = self._npz_data()
             if "joints" in data:
                 self._joints = data["joints"].astype(float)
-                _check_covers(self._npz_path, self._joints)
+                check_covers(self._npz_path, self._joints)
             if "markers" in data:
                 self._markers = data["markers"].astype(float)
                 self._marker_names = [str(n) for n in data.get("marker_names", [])]
@@ -557,19 +469,6 @@ def open_sequence(path) -> Sequence:
     if not path.exists():
         raise InputError(path, "no such sequence directory or .npz file")
     raise InputError(path, "not a sequence directory or .npz file")
-
-
-def _check_covers(path, points) -> None:
-    """Ground truth that stops before the sequence does was cut short: refuse it (scoring the
-    missing frames as unknown would report a wrong figure without a word)."""
-    known = np.flatnonzero(np.isfinite(points).all(axis=-1).any(axis=-1))
-    n = len(points)
-    last = int(known[-1]) if len(known) else None
-    if last is None:
-        raise InputError(path, "holds no coordinates")
-    if last < n - 1:
-        raise InputError(path, f"ends at frame {last}, but the sequence has frames 0 to {n - 1} "
-                               f"(cut short?)")
 
 
 def _check_points(name, points, n_frames, n_points=None):
