@@ -556,7 +556,7 @@ def test_the_corpus_is_large():
     assert len(CASES) >= 100
 
 
-def test_gltf_loader_refuses_in_one_line(tmp_path):
+def test_gltf_loader_refuses_in_one_line(tmp_path, recwarn):
     from depthtrack.body.gltf import load_skinned_gltf
 
     bad = {"empty.glb": b"", "garbage.glb": b"glTF" + bytes(range(200)), "text.gltf": b"{not json",
@@ -572,17 +572,29 @@ def test_gltf_loader_refuses_in_one_line(tmp_path):
         with pytest.raises(InputError) as info:
             load_skinned_gltf(tmp_path / name)
         assert name in str(info.value) and "\n" not in str(info.value)
+    assert not recwarn.list                                 # no warnings on stderr either
 
 
 def test_c3d_reader_refuses_in_one_line(tmp_path, capfd):
     from depthtrack.io.c3d import read_c3d_markers
 
+    import ezc3d
+
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = [100.0]
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = ("LFHD", "RFHD")
+    c3d["data"]["points"] = np.ones((4, 2, 50))
+    c3d.write(str(tmp_path / "good.c3d"))
+    good = (tmp_path / "good.c3d").read_bytes()
     for name, data in {"empty.c3d": b"", "garbage.c3d": bytes(range(256)) * 3,
-                       "short.c3d": b"\x02\x50" + b"\x00" * 100}.items():
+                       "short.c3d": b"\x02\x50" + b"\x00" * 100, "half.c3d": good[:len(good) // 2],
+                       "header.c3d": good[:512], "zero-blocks.c3d": good[:2] + b"\x00" * (len(good) - 2),
+                       "no-points.c3d": good[:512 + 30] + b"\xff" * (len(good) - 542)}.items():
         (tmp_path / name).write_bytes(data)
         with pytest.raises(InputError) as info:
             read_c3d_markers(tmp_path / name)
         assert name in str(info.value) and "\n" not in str(info.value)
+        assert capfd.readouterr().err == ""                 # ezc3d says nothing on stderr
 
 
 @pytest.mark.parametrize("argv_key", ["png", "meta", "arg", "out"])
