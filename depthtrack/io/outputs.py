@@ -120,23 +120,23 @@ def check_output(path, inputs=(), kind: str = "dir", force: bool = False, comman
     if not os.fspath(path).strip():
         raise InputError(None, f"{option or 'output'}: empty path")
     real = _resolve(path)
-    what = f"{option} " if option else ""
+    what = f"the output ({option}) " if option else "the output "
     for inp in inputs:
         if inp is None:
             continue
         src = _resolve(inp)
         if real == src:
-            raise InputError(shown, f"{what}output is the input {inp}; choose another place")
+            raise InputError(shown, f"{what}is the input {inp}; choose another place")
         if _inside(real, src):
-            raise InputError(shown, f"{what}output lies inside the input {inp}; choose another place")
+            raise InputError(shown, f"{what}lies inside the input {inp}; choose another place")
         if _inside(src, real):
-            raise InputError(shown, f"{what}output would replace a directory holding the input {inp}")
+            raise InputError(shown, f"{what}would replace a directory holding the input {inp}")
     _check_parent(real, shown)
     if os.path.lexists(real):
         if kind == "file" and real.is_dir():
-            raise InputError(shown, f"{what}output is an existing directory; give a file name")
+            raise InputError(shown, f"{what}is an existing directory; give a file name")
         if kind == "dir" and not real.is_dir():
-            raise InputError(shown, f"{what}output exists and is not a directory")
+            raise InputError(shown, f"{what}exists and is not a directory")
         if kind == "dir":
             clean_stale(real)
             try:
@@ -148,22 +148,13 @@ def check_output(path, inputs=(), kind: str = "dir", force: bool = False, comman
             ours = marker is not None and marker.get("command") == command
             if entries and not ours and not force:
                 whose = (f"an output of `depthtrack {marker.get('command')}`" if marker is not None
-                         else "not an earlier output of this command")
-                raise InputError(shown, f"{what}output is a non-empty directory, {whose}; choose a new "
+                         else f"not an earlier output of `depthtrack {command}`")
+                raise InputError(shown, f"{what}is a non-empty directory, {whose}; choose a new "
                                         f"place or pass --force to replace it")
     clean_stale(real)
     _PLANNED[real] = command
     return shown
 
 
-def check_outputs_differ(*paths) -> None:
-    """Two outputs of one command may not be the same place or inside each other."""
-    named = [(p, _resolve(p)) for p in paths if p is not None]
-    for i, (p, a) in enumerate(named):
-        for q, b in named[i + 1:]:
-            if _inside(a, b) or _inside(b, a):
-                raise InputError(p, f"output overlaps the other output {q}")
-
-
-__all__ = ["check_output", "check_outputs_differ", "read_marker", "write_marker", "planned_command",
+__all__ = ["check_output", "read_marker", "write_marker", "planned_command",
            "MARKER"]
