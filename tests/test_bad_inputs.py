@@ -468,6 +468,8 @@ _out_case("swim-train-input", lambda r, d: (["swim", "train", str(r / "motion.bv
 _out_case("reconstruct-input", lambda r, d: (["swim", "reconstruct", str(r / "markings.csv"), "--lengths",
                                               str(r / "lengths.json"), "-o", str(r / "markings.csv")],
                                              "markings.csv", r / "markings.csv"))
+_out_case("name-too-long", lambda r, d: (["eval", str(r / "seq"), "--track", str(r / "track"), "--report",
+                                          str(d / ("r" * 250))], "too long", d / ("r" * 250)))
 _out_case("demo-foreign", lambda r, d: (["demo", "--out", str(_foreign_dir(d))], "mine", d / "mine"))
 _out_case("demo-under-file", lambda r, d: (["demo", "--out", str(r / "afile" / "demo")], "afile", r / "afile"))
 

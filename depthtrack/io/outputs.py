@@ -120,6 +120,8 @@ def check_output(path, inputs=(), kind: str = "dir", force: bool = False, comman
     if not os.fspath(path).strip():
         raise InputError(None, f"{option or 'output'}: empty path")
     real = _resolve(path)
+    if len(os.fsencode(real.name)) > 255 - 40 or len(os.fsencode(real)) > 4000:
+        raise InputError(shown, "name too long for the file system (with room for the temporary name)")
     what = f"the output ({option}) " if option else "the output "
     for inp in inputs:
         if inp is None:
