@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
@@ -60,7 +61,6 @@ def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
     from ..evaluate.overlay import write_overlay
     from ..io.atomic import describe_os_error, write_text_atomic
     from ..io.track_output import summary_json_text
-    import json
 
     try:
         written = write_overlay(overlay, seq, poses, body)
