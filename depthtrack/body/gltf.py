@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import base64
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -204,7 +205,9 @@ def load_skinned_gltf(path) -> LoadedBody:
     if not is_glb and not head.lstrip().startswith(b"{"):
         raise InputError(path, "not a glTF file (expected a .glb or a .gltf JSON file)")
     try:
-        gltf = pygltflib.GLTF2().load_binary(str(path)) if is_glb else pygltflib.GLTF2().load_json(str(path))
+        with warnings.catch_warnings():      # pygltflib warns on stderr about what we refuse below
+            warnings.simplefilter("ignore")
+            gltf = pygltflib.GLTF2().load_binary(str(path)) if is_glb else pygltflib.GLTF2().load_json(str(path))
     except Exception as exc:  # pygltflib raises assorted errors on malformed files
         raise InputError(path, f"not a readable glTF file ({type(exc).__name__}: {exc})") from None
     if gltf is None or not gltf.nodes:

@@ -5,6 +5,7 @@ import argparse
 import json
 
 from ..errors import InputError
+from .args import integer, number
 
 
 def register(subparsers) -> None:
@@ -19,13 +20,13 @@ def register(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--mesh", choices=("decimated", "full"), default="decimated",
                    help="body mesh to render (default decimated, ~1000 triangles)")
-    p.add_argument("--tiles", type=int, nargs="+", default=None, metavar="T",
+    p.add_argument("--tiles", type=integer(4, 1024), nargs="+", default=None, metavar="T",
                    help="tile sizes in pixels, powers of two (default 32 64 128)")
-    p.add_argument("--batches", type=int, nargs="+", default=None, metavar="N",
+    p.add_argument("--batches", type=integer(1, 65536), nargs="+", default=None, metavar="N",
                    help="candidates per call (default 16 64 256 1024)")
     p.add_argument("--pixel", action="store_true",
                    help="time the pixel-wise cost instead of the smoothed likelihood")
-    p.add_argument("--seconds", type=float, default=None, metavar="S",
+    p.add_argument("--seconds", type=number(0, 3600, lo_open=True), default=None, metavar="S",
                    help="timing per cell (default 0.5; 0.1 with --quick)")
     p.add_argument("--quick", action="store_true",
                    help="short run: batches 16 64 256 and 0.1 s per cell")

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
+from .args import add_force, check_output
 from .reader_options import READER_HELP, add_reader_options, reader_options
 
 _EPILOG = READER_HELP + """
@@ -33,21 +34,8 @@ def register(subparsers) -> None:
     p.add_argument("out", metavar="OUT", help="output sequence directory (or .npz file)")
     add_reader_options(p)
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
+    add_force(p, "OUT")
     p.set_defaults(func=run)
-
-
-def _check_out(inp: Path, out: Path) -> None:
-    if out.resolve() == inp.resolve():
-        raise InputError(out, "is the input; choose another output")
-    if out.suffix.lower() == ".npz":
-        if out.is_dir():
-            raise InputError(out, "is a directory; an .npz output must be a file")
-        return
-    if out.exists() and not out.is_dir():
-        raise InputError(out, "exists and is not a directory")
-    if out.is_dir() and any(out.iterdir()) and not (out / "sequence.json").is_file():
-        raise InputError(out, "is a non-empty directory that is not a depth sequence; "
-                              "choose a new directory")
 
 
 def run(args) -> int:
@@ -57,8 +45,9 @@ def run(args) -> int:
 
     inp, out = Path(args.input), Path(args.out)
     options = reader_options(args)
+    check_output(args, "out", inputs=[inp], option="OUT",
+                 kind="file" if out.suffix.lower() == ".npz" else "dir")
     seq = open_sequence(inp, **options)
-    _check_out(inp, out)
     with Progress(len(seq), "frames", quiet=args.quiet) as progress:
         convert_sequence(seq, out, options=options, progress=progress)
     if not args.quiet:

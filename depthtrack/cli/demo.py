@@ -4,6 +4,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import InputError
+from .args import add_force, check_output, number
 
 
 def register(subparsers) -> None:
@@ -18,11 +19,12 @@ def register(subparsers) -> None:
                     "overlay video of the first method's track. Needs no data files.",
         )
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced)")
-    p.add_argument("--seconds", type=float, default=DEMO_SECONDS, help=f"length of the sequence in seconds (default {DEMO_SECONDS})")
+    p.add_argument("--seconds", type=number(0, 60, lo_open=True), default=DEMO_SECONDS, help=f"length of the sequence in seconds (default {DEMO_SECONDS})")
     p.add_argument("--methods", default=",".join(DEMO_METHODS),
                    help=f"comma-separated methods from hc, ep, hc+ep; the first one is drawn "
                         f"(default {','.join(DEMO_METHODS)})")
     p.add_argument("--quiet", action="store_true", help="print only where the outputs are")
+    add_force(p, "DIR")
     p.set_defaults(func=run)
 
 
@@ -33,6 +35,7 @@ def run(args) -> int:
     if not (args.seconds > 0 and args.seconds <= 60):
         raise InputError(None, "--seconds must be between 0 and 60")
     methods = check_methods(args.methods.split(","))
+    check_output(args, "out")
 
     def log(line):
         if not args.quiet:

@@ -7,6 +7,7 @@ import sys
 
 from ..errors import InputError
 from .reader_options import add_reader_options, reader_options
+from .args import add_force, check_output
 
 
 _EPILOG = """examples:
@@ -47,6 +48,7 @@ def register(subparsers) -> None:
                    help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout')
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_reader_options(p)
+    add_force(p, "the --report directory")
     p.set_defaults(func=run)
 
 
@@ -57,6 +59,7 @@ def run(args) -> int:
     if args.track is not None and args.methods is not None:
         raise InputError(None, "--methods and --track exclude each other (a track's method is in "
                                "its summary.json)")
+    check_output(args, "report", inputs=[*args.sequences, *(args.track or ())])
     methods = METHODS if args.methods is None else args.methods.split(",")
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
                           track_dirs=args.track, quiet=args.quiet, open_options=reader_options(args),

@@ -6,6 +6,7 @@ import json
 import sys
 
 from ..errors import InputError
+from .args import SEED, THREADS, add_force, integer, number
 
 _EPILOG = """examples:
   depthtrack swim evaluate --train ../shared/data/cmu/126_01.bvh --test ../shared/data/cmu/126_01.bvh --report swim-report
@@ -28,24 +29,41 @@ def _floats(text, what):
 
 def _ints(text, what):
     values = _floats(text, what)
-    if any(v < 1 or v != int(v) for v in values):
-        raise InputError(None, f"{what}: positive whole numbers expected: {text!r}")
+    if any(not v >= 1 or v != int(v) or v > 1e9 for v in values):
+        raise InputError(None, f"{what}: whole numbers in [1, 1e9] expected: {text!r}")
+    return [int(v) for v in values]
+
+
+def _starts(text):
+    """--cycle-starts: whole numbers >= 0, increasing (the take's length is checked on loading)."""
+    values = _floats(text, "--cycle-starts")
+    if any(not v >= 0 or v != int(v) for v in values) or len(values) < 2 or \
+            any(b <= a for a, b in zip(values, values[1:])):
+        raise InputError(None, f"--cycle-starts: at least two increasing whole frame numbers >= 0 "
+                               f"expected: {text!r}")
     return [int(v) for v in values]
 
 
 def _choices(text, allowed, what):
     values = [x.strip() for x in str(text).split(",") if x.strip()]
+    if values == ["both"]:                          # documented: "map, kmeans or both"
+        values = list(allowed)
     bad = [v for v in values if v not in allowed]
     if bad or not values:
         raise InputError(None, f"unknown {what} {', '.join(bad) or repr(text)} (choose from {', '.join(allowed)})")
     return tuple(values)
 
 
+#: The first-order derivative filters (depthtrack.motion.derivatives.first_order_filter).
+DERIVATIVES = ("d1", "d2", "taylor2", "taylor3", "taylor4")
+
+
 def _common_training(p):
-    p.add_argument("--length", type=int, default=100, help="reference cycle length L (default 100)")
-    p.add_argument("--smooth", type=float, default=2.0,
+    p.add_argument("--length", type=integer(10, 10000), default=100,
+                   help="reference cycle length L, 10 to 10000 (default 100)")
+    p.add_argument("--smooth", type=number(0, 100), default=2.0,
                    help="Gaussian smoothing width of the resampled cycles, in reference samples (default 2)")
-    p.add_argument("--derivative", default="taylor3",
+    p.add_argument("--derivative", default="taylor3", choices=DERIVATIVES, metavar="NAME",
                    help="first-order derivative filter: d1, d2, taylor2, taylor3, taylor4 (default taylor3)")
     p.add_argument("--cycle-starts", default=None,
                    help="manual cycle-start frames of the training take, comma-separated (overrides detection)")
@@ -78,31 +96,32 @@ def register(subparsers) -> None:
                    help="standard deviations (rad) of the Gaussian measurement model (default 0.05,0.1,0.5,1.0)")
     e.add_argument("--random-sigma", default="0.5,1.0,2.0",
                    help="larger sigmas for random initialisation with the most particles (thesis Fig. 7.13)")
-    e.add_argument("--frames", type=int, default=200, help="frames to predict (default 200)")
-    e.add_argument("--step", type=int, default=2,
+    e.add_argument("--frames", type=integer(1, 1000000), default=200, help="frames to predict (default 200)")
+    e.add_argument("--step", type=integer(1, 1000), default=2,
                    help="use every STEP-th frame of the test take (default 2: 60 Hz from 120 Hz mocap)")
     e.add_argument("--estimator", default="map,kmeans", help="map, kmeans or both (default both)")
     e.add_argument("--init", default="truth,random", help="truth, random or both (default both)")
     e.add_argument("--filter", default="particle,ukf", help="particle, ukf or both (default both)")
-    e.add_argument("--noise", type=float, default=0.05,
+    e.add_argument("--noise", type=number(0, 10), default=0.05,
                    help="standard deviation (rad) of the noise added to the true angles to make the "
                         "measurements (default 0.05; 0 = the exact truth as in the thesis)")
-    e.add_argument("--jitter", type=float, default=0.1,
+    e.add_argument("--jitter", type=number(0, 100), default=0.1,
                    help="isotropic acceleration noise added to the learned one, rad per reference "
                         "sample^2 (default 0.1; 0 = the thesis's model exactly)")
-    e.add_argument("--thesis-model-particles", type=int, default=100000,
+    e.add_argument("--thesis-model-particles", type=integer(0, 10**9), default=100000,
                    help="also run the thesis's model without jitter (sigma 0.1 and 0.5) for particle "
                         "counts up to this (default 100000; 0 = skip)")
-    e.add_argument("--temporal-sigma", type=float, default=None,
+    e.add_argument("--temporal-sigma", type=number(0, 10, lo_open=True), default=None,
                    help="standard deviation of the temporal acceleration, cycles per frame^2 (default 0.005/L)")
-    e.add_argument("--threads", type=int, default=1,
+    e.add_argument("--threads", type=THREADS, default=1,
                    help="worker threads for the particles (default 1: on this 2-vCPU machine a second "
                         "thread measured slower)")
-    e.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    e.add_argument("--seed", type=SEED, default=0, help="random seed (default 0)")
     e.add_argument("--report", metavar="DIR", default=None,
                    help="write metrics.json, results.md and plots into DIR (replaced)")
     e.add_argument("--json", action="store_true", help="print the metrics as JSON to stdout")
     e.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_force(e, "the --report directory")
     _common_training(e)
     e.set_defaults(func=run_evaluate)
 
@@ -112,7 +131,7 @@ def register(subparsers) -> None:
                                    "accelerations of every cycle) as JSON.")
     t.add_argument("bvh", metavar="BVH")
     t.add_argument("-o", "--output", required=True, metavar="JSON")
-    t.add_argument("--last-frame", type=int, default=None, help="only cycles ending at or before this frame")
+    t.add_argument("--last-frame", type=integer(0, 10**9), default=None, help="only cycles ending at or before this frame")
     _common_training(t)
     t.set_defaults(func=run_train)
 
@@ -122,6 +141,7 @@ def register(subparsers) -> None:
     d.add_argument("bvh", metavar="BVH")
     d.add_argument("--report", metavar="DIR", default=None, help="write derivatives.md, .json and a plot")
     d.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_force(d, "the --report directory")
     _common_training(d)
     d.set_defaults(func=run_derivatives)
 
@@ -135,6 +155,12 @@ def register(subparsers) -> None:
     r.add_argument("--stroke", choices=("back", "freestyle", "breast", "butterfly"), default="back")
     r.add_argument("-o", "--output", required=True, metavar="CSV", help="frame,joint,x,y,z")
     r.set_defaults(func=run_reconstruct)
+
+
+def _check_out(args, attr, inputs, kind, command):
+    from .args import check_output
+    check_output(args, attr, inputs=inputs, kind=kind, command=command,
+                 option="-o" if attr == "output" else None)
 
 
 def _progress(args, total):
@@ -153,9 +179,10 @@ def run_evaluate(args) -> int:
     estimators = _choices(args.estimator, ("map", "kmeans"), "estimator")
     inits = _choices(args.init, ("truth", "random"), "initialisation")
     filters = _choices(args.filter, ("particle", "ukf"), "filter")
-    if any(s <= 0 for s in sigmas + random_sigmas):
-        raise InputError(None, "sigmas must be positive")
-    starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
+    if any(not (0 < s <= 100) for s in sigmas + random_sigmas):
+        raise InputError(None, "--sigma and --random-sigma must be in (0, 100] rad")
+    starts = _starts(args.cycle_starts) if args.cycle_starts else None
+    _check_out(args, "report", [args.train, args.test], "dir", "swim evaluate")
     setup = prepare(args.train, args.test, frames=args.frames, step=args.step, length=args.length,
                     smooth_sigma=args.smooth, derivative=args.derivative, temporal_sigma=args.temporal_sigma,
                     train_starts=starts, units=args.units)
@@ -180,8 +207,9 @@ def run_train(args) -> int:
     from ..swim.stickfigure import ANGLE_NAMES
     from ..swim.training import train_motion_model
 
+    starts = _starts(args.cycle_starts) if args.cycle_starts else None
+    _check_out(args, "output", [args.bvh], "file", "swim train")
     mocap = load_swim_mocap(args.bvh, args.units)
-    starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
                                      smooth_sigma=args.smooth, last_frame=args.last_frame)
     model = train_motion_model(training, args.derivative)
@@ -199,8 +227,9 @@ def run_derivatives(args) -> int:
     from ..swim.mocap import load_swim_mocap
     from ..swim.derivative_report import derivative_table, write_derivative_report
 
+    starts = _starts(args.cycle_starts) if args.cycle_starts else None
+    _check_out(args, "report", [args.bvh], "dir", "swim derivatives")
     mocap = load_swim_mocap(args.bvh, args.units)
-    starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
                                      smooth_sigma=args.smooth)
     rows = compare_derivative_filters(training.cycles)
@@ -216,9 +245,15 @@ def run_derivatives(args) -> int:
 def run_reconstruct(args) -> int:
     from ..swim.markings import read_lengths, read_markings, reconstruct_markings, write_joints_csv
 
+    _check_out(args, "output", [args.markings, args.lengths], "file", "swim reconstruct")
     markings = read_markings(args.markings)
     lengths = read_lengths(args.lengths)
-    joints, info = reconstruct_markings(markings, lengths, stroke=args.stroke)
+    try:
+        joints, info = reconstruct_markings(markings, lengths, stroke=args.stroke)
+    except InputError as exc:                   # the markings' content is at fault: name the file
+        if exc.path is not None:
+            raise
+        raise InputError(args.markings, exc.problem) from None
     write_joints_csv(args.output, joints, markings.frames)
     print(f"{len(joints)} frames reconstructed ({info}): {args.output}", file=sys.stderr)
     return 0

@@ -5,6 +5,7 @@ import argparse
 import time
 
 from ..errors import InputError
+from .args import FPS, SEED, SUBJECT_HEIGHT, add_force, check_output, number
 
 _EPILOG = """examples:
   depthtrack synth walk.bvh seq_walk --seconds 1 --camera kinect-v2
@@ -30,27 +31,28 @@ def register(subparsers) -> None:
     p.add_argument("out", nargs="?", metavar="OUT", help="output sequence directory, or a .npz file")
     p.add_argument("--procedural", metavar="NAME", choices=sorted(PROCEDURAL_MOTIONS),
                    help=f"use a built-in motion instead of a BVH: {', '.join(PROCEDURAL_MOTIONS)}")
-    p.add_argument("--fps", type=float, default=25.0, help="output frame rate (default 25)")
-    p.add_argument("--start", type=float, default=0.0, metavar="S", help="seconds into the motion to start")
-    p.add_argument("--seconds", type=float, default=None, metavar="T", help="length to render (default: all)")
+    p.add_argument("--fps", type=FPS, default=25.0, help="output frame rate (default 25)")
+    p.add_argument("--start", type=number(0, 1e6), default=0.0, metavar="S", help="seconds into the motion to start")
+    p.add_argument("--seconds", type=number(0, 86400, lo_open=True), default=None, metavar="T", help="length to render (default: all)")
     p.add_argument("--camera", choices=sorted(CAMERA_PRESETS), default="sr4000",
                    help="camera intrinsics preset (default sr4000, 176 x 144)")
-    p.add_argument("--distance", type=float, default=None, metavar="M",
+    p.add_argument("--distance", type=number(0, 100, lo_open=True), default=None, metavar="M",
                    help="horizontal camera-subject distance in metres (default: the smallest "
                         "from 2.5 m in 0.25 m steps that keeps the whole body in view)")
-    p.add_argument("--azimuth", type=float, default=0.0, metavar="DEG",
+    p.add_argument("--azimuth", type=number(-360, 360), default=0.0, metavar="DEG",
                    help="turn the camera about the subject from straight in front (degrees)")
-    p.add_argument("--camera-height", type=float, default=None, metavar="M",
+    p.add_argument("--camera-height", type=number(0, 20, lo_open=True), default=None, metavar="M",
                    help="camera height above the floor (default 0.72 x subject height, chest)")
-    p.add_argument("--height", type=float, default=1.75, metavar="M", help="subject height (default 1.75)")
+    p.add_argument("--height", type=SUBJECT_HEIGHT, default=1.75, metavar="M", help="subject height (default 1.75)")
     p.add_argument("--noise", choices=("tof", "none"), default="tof", help="noise model (default tof)")
-    p.add_argument("--seed", type=int, default=0, help="noise random seed (default 0)")
+    p.add_argument("--seed", type=SEED, default=0, help="noise random seed (default 0)")
     p.add_argument("--units", default=None,
                    help="BVH units: metres per unit or cmu, m, cm, mm, inch (default: inferred, reported)")
     p.add_argument("--keep-leading-jump", action="store_true",
                    help="keep the frames a BVH motion teleports out of at its start (by default "
                         "they are dropped: CMU files open with a calibration T-pose)")
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
+    add_force(p, "OUT")
     p.set_defaults(func=run)
 
 
@@ -66,13 +68,9 @@ def run(args) -> int:
         if len(paths) != 2:
             raise InputError(None, "give MOTION.bvh and OUT (or --procedural NAME OUT)")
         motion, out = paths
-    for name in ("fps", "height"):
-        if not getattr(args, name) > 0:
-            raise InputError(None, f"--{name} must be positive")
-    if args.seconds is not None and not args.seconds > 0:
-        raise InputError(None, "--seconds must be positive")
-    if args.distance is not None and not args.distance > 0:
-        raise InputError(None, "--distance must be positive")
+    args.out = out                                  # ranges were checked by argparse
+    check_output(args, "out", inputs=[None if args.procedural else motion], option="OUT",
+                 kind="file" if str(out).lower().endswith(".npz") else "dir")
     common = dict(fps=args.fps, start=args.start, seconds=args.seconds, camera=args.camera,
                   distance=args.distance, azimuth=args.azimuth, height=args.height,
                   noise=args.noise, seed=args.seed, camera_height=args.camera_height, quiet=args.quiet)

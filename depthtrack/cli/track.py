@@ -2,12 +2,14 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
 
 from ..errors import InputError
 from .reader_options import add_reader_options, reader_options
+from .args import add_force, check_output
 
 _EPILOG = """methods (the ToF paper's experiments):
   hc      model-based hill climbing only
@@ -54,15 +56,29 @@ def register(subparsers) -> None:
                         "frame 0 instead of the automatic initialisation (recorded in summary.json)")
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
     add_reader_options(p)
+    add_force(p, "OUT")
     p.set_defaults(func=run)
 
 
-def _check_out(out: Path) -> None:
-    if out.exists() and not out.is_dir():
-        raise InputError(out, "exists and is not a directory")
-    if out.is_dir() and any(out.iterdir()) and not (out / "summary.json").is_file():
-        raise InputError(out, "is a non-empty directory that is not a track output; "
-                              "choose a new directory")
+def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
+    """Write the overlay after the (complete) track; only then does summary.json name it.
+
+    A failed overlay leaves the track complete and consistent: its summary.json names
+    no overlay, and the one-line error says the track is there.
+    """
+    from ..evaluate.overlay import write_overlay
+    from ..io.atomic import describe_os_error, write_text_atomic
+    from ..io.track_output import summary_json_text
+
+    try:
+        written = write_overlay(overlay, seq, poses, body)
+    except OSError as exc:
+        raise InputError(overlay, f"overlay not written ({describe_os_error(exc)}); the track in "
+                                  f"{out} is complete") from None
+    summary["overlay"] = str(written)
+    written_summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    written_summary["overlay"] = str(written)
+    write_text_atomic(out / "summary.json", summary_json_text(written_summary))
 
 
 def run(args) -> int:
@@ -71,10 +87,11 @@ def run(args) -> int:
     from ..track.tracker import run_tracking
 
     out = Path(args.out)
-    _check_out(out)
+    check_output(args, "out", inputs=[args.sequence], option="-o")
     overlay = Path(args.overlay) if args.overlay else None
     if overlay is not None and overlay.suffix.lower() not in OVERLAY_SUFFIXES:
         raise InputError(overlay, "overlay must end in .mp4 or .gif")
+    check_output(args, "overlay", inputs=[args.sequence, args.out], kind="file")
     seq = open_sequence(args.sequence, **reader_options(args))
     t0 = time.perf_counter()
     with Progress(len(seq), "frames", quiet=args.quiet) as progress:
@@ -86,10 +103,7 @@ def run(args) -> int:
     summary["sequence"] = str(seq.path)
     write_track(out, result.joints, result.poses, body.pose_names, body, seq.fps, summary)
     if overlay is not None:
-        from ..evaluate.overlay import write_overlay
-
-        written = write_overlay(overlay, seq, result.poses, body)
-        summary["overlay"] = str(written)
+        _add_overlay(out, overlay, seq, result.poses, body, summary)
     if not args.quiet:
         t = summary["timings"]
         print(f"tracked {len(seq)} frames with {args.method} ({args.likelihood} likelihood) in "

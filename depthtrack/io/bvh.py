@@ -498,8 +498,8 @@ def _resolve_units(units, path):
                                    f"{', '.join(sorted(UNIT_NAMES))}") from None
     else:
         value = float(units)
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(path, f"BVH units must be a positive number of metres per unit, not {units!r}")
+    if not (math.isfinite(value) and 1e-6 <= value <= 100):
+        raise InputError(path, f"BVH units must be a positive number of metres per unit (1e-06 to 100), not {units!r}")
     return value, f"given: {value:.6g} m/unit"
 
 

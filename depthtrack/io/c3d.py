@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,6 +46,37 @@ class C3dMarkers:
     units_source: str
 
 
+def _header_frames(path):
+    """Frames the C3D header block claims (ezc3d reports what it could read instead), or None
+    when the 16-bit header cannot say (65535 frames or more)."""
+    with open(path, "rb") as f:
+        head = f.read(512)
+        param_block = head[0] if head else 0
+        f.seek(max(param_block - 1, 0) * 512 + 3)
+        processor = f.read(1)
+    order = ">" if processor == bytes([86]) else "<"            # 86 = MIPS, big-endian
+    first, last = struct.unpack(order + "HH", head[6:10])
+    if last >= 65535 or last < first:
+        return None
+    return last - first + 1
+
+
+def _probe(path) -> None:
+    """Parse the file in a child process first: ezc3d crashes the process (SIGSEGV) on some
+    corrupt parameter sections, which must end in one line, not a dead interpreter."""
+    import subprocess
+    import sys
+
+    code = "import sys, ezc3d\ntry:\n    ezc3d.c3d(sys.argv[1])\nexcept Exception:\n    pass\n"
+    try:
+        child = subprocess.run([sys.executable, "-c", code, path], stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL, timeout=600)
+    except subprocess.TimeoutExpired:
+        raise InputError(path, "cannot read C3D (the reader did not finish in 10 minutes)") from None
+    if child.returncode != 0:
+        raise InputError(path, f"corrupt C3D (the C3D reader failed with status {child.returncode})")
+
+
 def read_c3d_markers(path, units=None) -> C3dMarkers:
     """Read the 3D points of a C3D file.
 
@@ -64,6 +96,7 @@ def read_c3d_markers(path, units=None) -> C3dMarkers:
     path = os.fspath(path)
     if not Path(path).is_file():
         raise InputError(path, "no such C3D file")
+    _probe(path)
     try:
         c3d = ezc3d.c3d(path)
     except Exception as exc:  # ezc3d raises plain RuntimeError/IOError on bad files
@@ -72,6 +105,10 @@ def read_c3d_markers(path, units=None) -> C3dMarkers:
     points = np.asarray(c3d["data"]["points"], dtype=float)       # (4, M, F)
     if points.ndim != 3 or points.shape[1] == 0 or points.shape[2] == 0:
         raise InputError(path, "C3D file holds no 3D points")
+    claimed = _header_frames(path)
+    if claimed is not None and points.shape[2] < claimed:
+        raise InputError(path, f"truncated C3D: the header says {claimed} frames, the file holds "
+                               f"{points.shape[2]}")
     names = [str(n).strip() for n in params["LABELS"]["value"]][: points.shape[1]]
     names += [f"marker{i}" for i in range(len(names), points.shape[1])]
     rate = float(c3d["header"]["points"]["frame_rate"])

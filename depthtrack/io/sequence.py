@@ -29,8 +29,9 @@ from ..camera import Camera
 from ..contract import JOINT_NAMES, SEQUENCE_FORMAT
 from ..errors import InputError
 from .atomic import atomic_path
+from .validation import (PNG_SIGNATURE as _PNG_SIGNATURE, check_camera_fields, check_covers, check_png_chunks,
+                         finite_positive, in_range, stderr_silenced)
 
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _FRAME_NAME = re.compile(r"^(\d+)\.png$")
 #: Largest raw value a 16-bit PNG holds.
 MAX_RAW = 65535
@@ -59,7 +60,13 @@ def png_header(path):
 def _read_png16(path) -> np.ndarray:
     import cv2
 
-    raw = cv2.imread(os.fspath(path), cv2.IMREAD_UNCHANGED)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputError(path, f"cannot read ({exc.strerror or exc})") from None
+    check_png_chunks(path, data)
+    with stderr_silenced():                    # libpng reports bad data on stderr too
+        raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if raw is None:
         raise InputError(path, "cannot decode PNG")
     if raw.dtype != np.uint16 or raw.ndim != 2:
@@ -105,16 +112,6 @@ def depth_to_raw(depth, depth_scale: float) -> np.ndarray:
 
 
 # ------------------------------------------------------------------- metadata
-def _finite_positive(value, what, path):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(path, f"{what} is not a number ({value!r})") from None
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(path, f"{what} must be a positive finite number, not {value!r}")
-    return value
-
-
 def _parse_meta(text: str, path):
     try:
         meta = json.loads(text)
@@ -128,10 +125,11 @@ def _parse_meta(text: str, path):
     for key in ("fps", "depth_scale", "camera"):
         if key not in meta:
             raise InputError(path, f"missing {key!r}")
-    fps = _finite_positive(meta["fps"], "fps", path)
-    depth_scale = _finite_positive(meta["depth_scale"], "depth_scale", path)
+    fps = in_range(finite_positive(meta["fps"], "fps", path), "fps", path)
+    depth_scale = in_range(finite_positive(meta["depth_scale"], "depth_scale", path), "depth_scale", path)
     if not isinstance(meta["camera"], dict):
         raise InputError(path, "camera must be an object")
+    check_camera_fields(meta["camera"], path)
     try:
         camera = Camera.from_dict(meta["camera"], path)
     except InputError as exc:
@@ -142,7 +140,8 @@ def _parse_meta(text: str, path):
         if not isinstance(subject, dict):
             raise InputError(path, "subject must be an object")
         if subject.get("height_m") is not None:
-            height = _finite_positive(subject["height_m"], "subject.height_m", path)
+            height = in_range(finite_positive(subject["height_m"], "subject.height_m", path),
+                               "subject.height_m", path)
     return meta, camera, fps, depth_scale, height
 
 
@@ -333,6 +332,7 @@ class Sequence:
         if self._frame_files is not None:
             if self._joints_path is not None:
                 self._joints, _ = read_points_csv(self._joints_path, self._n, "joint", JOINT_NAMES)
+                check_covers(self._joints_path, self._joints)
             if self._markers_path is not None:
                 # sequence.json may fix the marker order; otherwise first appearance.
                 names = self.meta.get("marker_names")
@@ -343,6 +343,7 @@ class Sequence:
             data = self._npz_data()
             if "joints" in data:
                 self._joints = data["joints"].astype(float)
+                check_covers(self._npz_path, self._joints)
             if "markers" in data:
                 self._markers = data["markers"].astype(float)
                 self._marker_names = [str(n) for n in data.get("marker_names", [])]
@@ -446,6 +447,8 @@ def _open_npz(path: Path) -> Sequence:
     for key in ("joints", "markers"):
         if key in arrays:
             a = arrays[key]
+            if a.dtype.kind not in "fiu":
+                raise InputError(path, f"{key} must hold numbers, not {a.dtype}")
             if np.any(np.isinf(a)):
                 raise InputError(path, f"{key} hold infinite values")
     seq = Sequence(path, meta, camera, fps, depth_scale, height, n, npz_path=path)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -110,8 +111,13 @@ def write_track(out_dir, joints, poses, pose_names, body, fps: float, summary: d
                 else:
                     filled[i] = last
             write_bvh(tmp / "track.bvh", body, filled, fps)
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default) + "\n")
+        (tmp / "summary.json").write_text(summary_json_text(summary))
     return out_dir
+
+
+def summary_json_text(summary: dict) -> str:
+    """The text of ``summary.json`` for ``summary`` (numpy values and paths converted)."""
+    return json.dumps(summary, indent=1, default=_json_default) + "\n"
 
 
 def _json_default(value):
@@ -146,8 +152,10 @@ def read_track(out_dir) -> Track:
             fps = float(data["fps"])
     except FileNotFoundError:
         raise InputError(npz_path, "missing poses.npz") from None
-    except (KeyError, ValueError, OSError) as exc:
+    except (KeyError, ValueError, OSError, TypeError, zipfile.BadZipFile) as exc:
         raise InputError(npz_path, f"not a track poses file ({exc})") from None
+    if poses.ndim != 2 or not (math.isfinite(fps) and fps > 0):
+        raise InputError(npz_path, f"not a track poses file (poses {poses.shape}, fps {fps})")
     summary_path = out_dir / "summary.json"
     try:
         summary = json.loads(summary_path.read_text())
@@ -155,6 +163,10 @@ def read_track(out_dir) -> Track:
         raise InputError(summary_path, "missing summary.json") from None
     except json.JSONDecodeError as exc:
         raise InputError(summary_path, f"invalid JSON (line {exc.lineno}: {exc.msg})") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(summary_path, f"cannot read ({getattr(exc, 'strerror', None) or exc})") from None
+    if not isinstance(summary, dict):
+        raise InputError(summary_path, f"must hold a JSON object, not {type(summary).__name__}")
     joints_path = out_dir / "joints.csv"
     if not joints_path.is_file():
         raise InputError(joints_path, "missing joints.csv")

@@ -213,6 +213,9 @@ def build_training_cycles(joints, fps: float, starts=None, length: int = 100, sm
     angles = continue_angles(joints_to_angles(joints))
     if starts is None:
         starts = detect_cycle_starts(joints, fps, stroke, side)
+    elif len(starts) and not 0 <= min(starts) <= max(starts) < len(joints):
+        raise InputError(None, f"cycle starts must be frames of the take (0 to {len(joints) - 1}), "
+                               f"not {', '.join(map(str, starts))}")
     sets = [(np.asarray(starts, int), angles, side)]
     if use_other_side and stroke in ("back", "freestyle"):
         other = "left" if side == "right" else "right"

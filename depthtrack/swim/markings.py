@@ -66,8 +66,13 @@ def read_markings(path) -> Markings:
     if not path.is_file():
         raise InputError(path, "no such markings file")
     rows = []
-    with open(path, newline="") as fh:
-        lines = [ln for ln in fh if ln.strip() and not ln.lstrip().startswith("#")]
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            lines = [ln for ln in fh if ln.strip() and not ln.lstrip().startswith("#")]
+    except UnicodeDecodeError:
+        raise InputError(path, "not a text CSV file (binary content)") from None
+    if any("\0" in ln for ln in lines):
+        raise InputError(path, "not a text CSV file (binary content)")
     reader = csv.DictReader(lines)
     need = {"frame", "joint", "u", "v", "view"}
     if reader.fieldnames is None or not need <= set(reader.fieldnames):
@@ -78,6 +83,8 @@ def read_markings(path) -> Markings:
             frame = int(row["frame"])
         except (TypeError, ValueError):
             raise InputError(path, f"line {n}: frame {row['frame']!r} is not an integer") from None
+        if not 0 <= frame <= 10**7:
+            raise InputError(path, f"line {n}: frame {frame} is outside 0 to 10000000")
         view = (row["view"] or "side").strip()
         if view not in VIEWS:
             raise InputError(path, f"line {n}: unknown view {view!r} ({', '.join(VIEWS)})")
@@ -91,6 +98,8 @@ def read_markings(path) -> Markings:
             u, v = float(row["u"]), float(row["v"])
         except (TypeError, ValueError):
             raise InputError(path, f"line {n}: u, v must be numbers") from None
+        if not (np.isfinite(u) and np.isfinite(v)):
+            raise InputError(path, f"line {n}: u, v must be finite numbers")
         nearer = str(row.get("nearer") or "").strip() in ("1", "true", "True", "yes")
         rows.append((view, frame, SWIM_INDEX[joint], u, v, nearer))
     if not rows:
@@ -135,20 +144,25 @@ def read_lengths(path) -> np.ndarray:
     if not path.is_file():
         raise InputError(path, "no such lengths file")
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(path, "not a JSON text file") from None
     except json.JSONDecodeError as exc:
         raise InputError(path, f"not JSON: {exc.msg}") from None
-    if isinstance(data, dict):
-        missing = [s for s in SEGMENTS if s not in data]
-        if missing:
-            raise InputError(path, f"lengths missing for {', '.join(missing)}")
-        lengths = np.array([float(data[s]) for s in SEGMENTS])
-    else:
-        lengths = np.asarray(data, dtype=float)
-        if lengths.shape != (len(SEGMENTS),):
-            raise InputError(path, f"expected {len(SEGMENTS)} lengths, got {lengths.size}")
-    if (lengths <= 0).any():
-        raise InputError(path, "lengths must be positive")
+    try:
+        if isinstance(data, dict):
+            missing = [s for s in SEGMENTS if s not in data]
+            if missing:
+                raise InputError(path, f"lengths missing for {', '.join(missing)}")
+            lengths = np.array([float(data[s]) for s in SEGMENTS])
+        else:
+            lengths = np.asarray(data, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(path, "lengths must be numbers") from None
+    if lengths.shape != (len(SEGMENTS),):
+        raise InputError(path, f"expected {len(SEGMENTS)} lengths, got {lengths.size}")
+    if not (np.isfinite(lengths) & (lengths > 0)).all():
+        raise InputError(path, "lengths must be positive finite numbers")
     return lengths
 
 
