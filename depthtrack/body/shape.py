@@ -159,7 +159,7 @@ class BodyShape:
                 if not SHAPE_RANGES[f][0] - 1e-9 <= getattr(self, f) <= SHAPE_RANGES[f][1] + 1e-9]
 
     def to_dict(self) -> dict:
-        return {k: round(v, 6) for k, v in asdict(self).items()}
+        return {k: float(v) for k, v in asdict(self).items()}
 
     @classmethod
     def from_dict(cls, data, path=None) -> "BodyShape":
