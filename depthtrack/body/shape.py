@@ -51,8 +51,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..contract import JOINT_NAMES
 from ..errors import InputError
-from .skeleton import JOINT_ID, NUM_JOINTS
+from .mesh import linear_blend_skinning
+from .skeleton import DOF, JOINT_ID, NUM_JOINTS, PARENTS, forward_kinematics
 
 #: Shape fields in a fixed order (the parameter vector of :meth:`BodyShape.as_array`).
 SHAPE_FIELDS = ("upper_arm", "forearm", "thigh", "shin", "torso", "neck_head", "shoulder_width",
@@ -286,11 +288,7 @@ def segment_lengths(body) -> dict:
     between the joints; ``foot``: extent along the foot (model z) of the surface the ankle
     moves (dominant skin weight), on the body's reference mesh.
     """
-    from .skeleton import DOF
-
     p = np.asarray(body.joint_positions(np.zeros(DOF)))
-    from ..contract import JOINT_NAMES
-
     q = {n: p[i] for i, n in enumerate(JOINT_NAMES)}
 
     def both(a, b):
@@ -313,9 +311,6 @@ def segment_lengths(body) -> dict:
 def foot_length(body) -> float:
     """Length (m) of the feet at the zero pose: z extent of the vertices whose dominant joint
     is an ankle, mean of both feet, on the body's reference mesh."""
-    from .mesh import linear_blend_skinning
-    from .skeleton import DOF, PARENTS, forward_kinematics
-
     m = body.reference_mesh
     skin = forward_kinematics(np.zeros((1, DOF)), body.offsets, PARENTS) @ (body.bone_scale @ m.inverse_bind)
     v = linear_blend_skinning(m.vertices, m.joints, m.weights, skin)[0]

@@ -14,9 +14,9 @@ and the uniform scale (hence the height) that explain the frames best, alternati
 
 Energy of a shape ``s`` with poses ``x_k`` (camera pixels' worth, as the tracker's)::
 
-    E(s) = sum_k A_k * mean_tile_cost(s, x_k | frame k) + 0.5 * sum_i (log s_i / sd_i)^2
+    E(s) = sum_k A_k * mean_tile_cost(s, x_k | frame k) + 0.5 * w * sum_i (log s_i / sd_i)^2
 
-``A_k`` the area of frame k's ROI in camera pixels, ``sd_i`` the population spread
+``A_k`` the area of frame k's ROI in camera pixels, ``w`` the prior weight, ``sd_i`` the population spread
 (:data:`~depthtrack.body.shape.LOG_SD`): a weak prior that settles what the frames cannot
 tell (the split of a straight arm into upper arm and forearm, the foot seen from the
 front) toward average proportions. Shape fields stay within
@@ -64,6 +64,8 @@ class ShapeFit:
     seconds : float
     history : list of dict
         Per round: energy after the shape search and after the pose refinement.
+    tile : int
+        Tile side the candidates were rendered at.
     """
 
     body: object
@@ -75,6 +77,7 @@ class ShapeFit:
     evaluations: int
     seconds: float
     history: list = field(default_factory=list)
+    tile: int = 0
 
     def to_dict(self) -> dict:
         """A JSON-serialisable summary (for ``summary.json`` ``body``)."""
@@ -82,7 +85,7 @@ class ShapeFit:
                 "segment_lengths_m": self.body.segment_lengths(),
                 "energy": round(self.energy, 2), "start_energy": round(self.start_energy, 2),
                 "frames": int(len(self.poses)), "evaluations": int(self.evaluations),
-                "seconds": round(self.seconds, 2), "rounds": self.history}
+                "seconds": round(self.seconds, 2), "tile": int(self.tile), "rounds": self.history}
 
 
 class _MatrixBody:
@@ -142,9 +145,19 @@ def _lower_upper():
     return lo, hi
 
 
-def fit_shape(body, camera, depths, masks, poses, floor_planes=None, tile: int = 128,
+def auto_tile(masks, margin: float = 0.1, largest: int = 256) -> int:
+    """The smallest power-of-two tile (>= 64, <= ``largest``) that holds every mask's box
+    with ``margin`` at one camera pixel per tile pixel (:func:`frame_observation`)."""
+    size = max(square_roi(np.asarray(m, bool), margin)[2] for m in masks)
+    tile = 64
+    while tile < size and tile < largest:
+        tile *= 2
+    return tile
+
+
+def fit_shape(body, camera, depths, masks, poses, floor_planes=None, tile: int | None = None,
               rounds: int = 2, max_iterations: int = 40, refine_poses: bool = True,
-              smoothed: bool = False, prior_weight: float = 1.0, fit_scale: bool = True,
+              smoothed: bool = False, prior_weight: float = 30.0, fit_scale: bool = True,
               log=None) -> ShapeFit:
     """Fit shape and scale of ``body`` to K segmented depth frames (module docstring).
 
@@ -163,8 +176,9 @@ def fit_shape(body, camera, depths, masks, poses, floor_planes=None, tile: int =
         The body's pose in each frame (the tracker's).
     floor_planes : sequence of (4,) float or None, optional
         Each frame's floor plane (pixels on it are background).
-    tile : int
-        Tile side of the renderer (128: about 2 cm per tile pixel on a person at 3 m).
+    tile : int or None
+        Tile side of the renderer; None = :func:`auto_tile` (one camera pixel per tile
+        pixel up to 256: an SR4000 person at 3 m needs 256, at 4.6 m 128).
     rounds : int
         Shape-then-pose alternations.
     max_iterations : int
@@ -175,7 +189,9 @@ def fit_shape(body, camera, depths, masks, poses, floor_planes=None, tile: int =
         Smoothed likelihood (True) or the per-pixel sensor cost (False, default: the
         neighbour tolerance of the smoothed one blurs silhouettes by a pixel).
     prior_weight : float
-        Weight of the population prior (0 = none).
+        Weight of the population prior (0 = none). 30 was chosen on the dev motions
+        (``tools/shape_fit_bench.py --split dev --people 4``: median segment-length error
+        0.7 cm against 0.9 cm with weight 1; a 1-s.d. field then costs 15 pixels' worth).
     fit_scale : bool
         Also fit the uniform scale (the height); False keeps the body's.
     log : callable(str) or None
@@ -194,6 +210,9 @@ def fit_shape(body, camera, depths, masks, poses, floor_planes=None, tile: int =
         raise InputError(None, f"fit_shape needs as many depth frames and masks as poses "
                                f"({len(depths)}, {len(masks)}, {K})")
     planes = list(floor_planes) if floor_planes is not None else [None] * K
+    if any(not np.asarray(m).any() for m in masks):
+        raise InputError(None, "the shape fit needs frames with a person in them (an empty mask)")
+    tile = auto_tile(masks) if tile is None else int(tile)
     frames = [frame_observation(d, m, camera, p, tile=tile) for d, m, p in zip(depths, masks, planes)]
     areas = np.array([roi[2] ** 2 for _, roi in frames])
     base_scale = float(body.scale)
@@ -257,7 +276,7 @@ def fit_shape(body, camera, depths, masks, poses, floor_planes=None, tile: int =
         renderer.release()
     fitted = body_at(x)
     return ShapeFit(fitted, fitted.shape, float(fitted.height), poses, e, start_energy,
-                    evaluations, time.perf_counter() - t0, history)
+                    evaluations, time.perf_counter() - t0, history, tile)
 
 
 def _coordinate_search(x, e, energies, lo, hi, active, max_iterations):
@@ -310,4 +329,4 @@ def write_body_json(path, body, fit: ShapeFit | None = None) -> None:
     write_text_atomic(path, json.dumps(data, indent=1) + "\n")
 
 
-__all__ = ["ShapeFit", "fit_shape", "frame_observation", "write_body_json", "SHAPE_STEPS"]
+__all__ = ["ShapeFit", "fit_shape", "auto_tile", "frame_observation", "write_body_json", "SHAPE_STEPS"]
