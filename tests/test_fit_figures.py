@@ -6,7 +6,7 @@ import pytest
 
 from depthtrack.body.shape import BodyShape
 from depthtrack.cli import main
-from depthtrack.evaluate.fit import frame_fit, summarize_fit, track_fit
+from depthtrack.evaluate.fit import frame_fit, person_masks, summarize_fit, track_fit
 
 render = pytest.importorskip("depthtrack.render")
 
@@ -60,19 +60,20 @@ def synthetic(tmp_path_factory):
 
 def test_true_pose_explains_the_frame_and_a_shifted_one_less(synthetic):
     seq, body, poses = synthetic["seq"], synthetic["body"], synthetic["poses"]
-    true_fit = track_fit(seq, poses, body)
+    masks = person_masks(seq)
+    true_fit = track_fit(seq, poses, body, masks)
     assert true_fit.shape == (2, 3)
     assert np.all(true_fit[:, 0] > 0.95)            # IoU: segmentation edges cost a little
     assert np.all(true_fit[:, 1] < 0.03)
     assert np.all(true_fit[:, 2] < 0.005)           # noise-free: the depths agree
     shifted = poses.copy()
     shifted[:, 0] += 0.10                           # 10 cm sideways
-    off = track_fit(seq, shifted, body)
+    off = track_fit(seq, shifted, body, masks)
     assert np.all(off[:, 0] < true_fit[:, 0] - 0.1)
     assert np.all(off[:, 1] > true_fit[:, 1] + 0.1)
     missing = poses.copy()
     missing[1] = np.nan
-    part = track_fit(seq, missing, body)
+    part = track_fit(seq, missing, body, masks)
     assert part[1, 0] == 0.0 and part[1, 1] == 1.0
 
 
