@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import functools
+import json
 from importlib import resources
 from pathlib import Path
 
@@ -9,11 +10,15 @@ import numpy as np
 
 from ..contract import JOINT_NAMES
 from .mesh import SkinnedMesh, linear_blend_skinning
+from .shape import BodyShape, segment_lengths, shaped_offsets, surface_maps
 from .skeleton import (CONTRACT_SOURCE, DOF, JOINTS, JOINT_ID, LOWER, NUM_JOINTS, PARENTS,
                        POSE_NAMES, UPPER, as_batch, children_of, forward_kinematics)
 
 #: Level-of-detail names of the shipped default mesh and their files in depthtrack/data/meshes/.
 DEFAULT_MESH_FILES = {"full": "body_full.glb", "decimated": "body_decimated.glb"}
+
+#: ``format`` of a body description (:meth:`BodyModel.to_json`, a track's ``body.json``).
+BODY_FORMAT = "depthtrack-body/1"
 
 #: Keys accepted in ``segment_scale``: a joint name stretches the bone that ends at that
 #: joint (``"l_knee"``: the left thigh); ``"head"`` stretches neck-to-head-centre.
@@ -53,6 +58,9 @@ class BodyModel:
         Per-bone stretch (see :data:`SEGMENT_KEYS`), applied on top of ``scale``.
     lods : dict {str: SkinnedMesh or path}
         Other meshes bound to the same skeleton, for :meth:`with_mesh`.
+    shape : BodyShape or None
+        Relative proportions (:mod:`depthtrack.body.shape`), applied before ``scale`` and
+        ``segment_scale``; None = the mesh's own.
 
     Scaling: a bone ending at joint c is stretched by ``f_c`` and the surface that the
     parent joint j moves is stretched by ``f_c`` along that bone's rest direction, via a
@@ -62,11 +70,13 @@ class BodyModel:
     Stretching a bone whose parent has several children (``spine``, ``l_hip`` under the
     pelvis; ``neck``, shoulders under the spine) also stretches the parent's other
     vertices along that direction -- an approximation at the few centimetres around the
-    parent joint.
+    parent joint. A ``shape`` adds its per-joint maps ``L_j``
+    (:func:`~depthtrack.body.shape.surface_maps`): ``S_j = scale * stretch_j @ L_j`` and
+    bone offsets ``L_parent @ base_offset`` (before the stretch).
     """
 
     def __init__(self, mesh: SkinnedMesh, offsets, head_offset, scale=1.0, segment_scale=None,
-                 lods=None, mesh_name="full", height_mesh=None):
+                 lods=None, mesh_name="full", height_mesh=None, shape=None):
         offsets = np.asarray(offsets, dtype=np.float64)
         if offsets.shape != (NUM_JOINTS, 3):
             raise ValueError(f"offsets must be ({NUM_JOINTS}, 3)")
@@ -86,6 +96,9 @@ class BodyModel:
         self.base_head_offset = np.asarray(head_offset, dtype=np.float64).copy()
         self.scale = float(scale)
         self.segment_scale = seg
+        if shape is not None and not isinstance(shape, BodyShape):
+            raise ValueError(f"shape must be a BodyShape, got {type(shape).__name__}")
+        self.shape = shape or BodyShape()
         self._lods = dict(lods or {})
         self._lods.setdefault(mesh_name, mesh)
 
@@ -93,9 +106,11 @@ class BodyModel:
         for key, f in seg.items():
             if key != "head":
                 factors[JOINT_ID[key]] = f
-        self.offsets = self.scale * factors[:, None] * self.base_offsets
-        self.head_offset = self.scale * seg.get("head", 1.0) * self.base_head_offset
-        self.bone_scale = self._scale_matrices(factors, seg.get("head", 1.0))
+        maps = surface_maps(self.shape, self.base_offsets, self.base_head_offset)
+        shaped, shaped_head = shaped_offsets(maps, self.base_offsets, self.base_head_offset, PARENTS)
+        self.offsets = self.scale * factors[:, None] * shaped
+        self.head_offset = self.scale * seg.get("head", 1.0) * shaped_head
+        self.bone_scale = self._scale_matrices(factors, seg.get("head", 1.0), shaped, shaped_head, maps)
         self._scaled_inverse_bind = self.bone_scale @ mesh.inverse_bind
         self._rest_vertices = None
         # the mesh whose extent defines `height`, shared by all levels of detail so
@@ -104,12 +119,17 @@ class BodyModel:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def default(cls, height=1.75, mesh="full"):
-        """The shipped default body scaled to ``height`` metres, with ``mesh`` "full" or "decimated"."""
+    def default(cls, height=1.75, mesh="full", shape=None):
+        """The shipped default body scaled to ``height`` metres, with ``mesh`` "full" or "decimated".
+
+        ``shape``: a :class:`~depthtrack.body.shape.BodyShape` (relative proportions); the
+        body is then scaled so that its standing height is still ``height``.
+        """
         loaded = _load_cached(str(default_mesh_path("full")))
         lods = {name: default_mesh_path(name) for name in DEFAULT_MESH_FILES}
         lods["full"] = loaded.mesh
-        body = cls(loaded.mesh, loaded.offsets, loaded.head_offset, lods=lods, mesh_name="full")
+        body = cls(loaded.mesh, loaded.offsets, loaded.head_offset, lods=lods, mesh_name="full",
+                   shape=shape)
         body = body.scaled(height=height)
         return body if mesh == "full" else body.with_mesh(mesh)
 
@@ -126,12 +146,21 @@ class BodyModel:
                    lods={"file": loaded.mesh})
         return body if height is None else body.scaled(height=height)
 
-    def _copy(self, mesh=None, scale=None, segment_scale=None, mesh_name=None):
+    def _copy(self, mesh=None, scale=None, segment_scale=None, mesh_name=None, shape=None):
         return BodyModel(self.mesh if mesh is None else mesh, self.base_offsets, self.base_head_offset,
                          scale=self.scale if scale is None else scale,
                          segment_scale=self.segment_scale if segment_scale is None else segment_scale,
                          lods=self._lods, mesh_name=self.mesh_name if mesh_name is None else mesh_name,
-                         height_mesh=self._height_mesh)
+                         height_mesh=self._height_mesh, shape=self.shape if shape is None else shape)
+
+    def shaped(self, shape, height=None):
+        """A copy with another :class:`~depthtrack.body.shape.BodyShape` (None = average).
+
+        ``height`` None keeps the uniform scale (so a longer thigh makes the body taller);
+        a number rescales the shaped body to that standing height (metres).
+        """
+        body = self._copy(shape=BodyShape() if shape is None else shape)
+        return body if height is None else body.scaled(height=height)
 
     def scaled(self, height=None, segment_scale=None):
         """A copy with other body dimensions.
@@ -165,21 +194,24 @@ class BodyModel:
             self._lods[mesh] = found
         return self._copy(mesh=found, mesh_name=mesh)
 
-    def _scale_matrices(self, factors, head_factor):
-        """Per-joint bind-frame stretch ``S (J, 4, 4)``."""
+    def _scale_matrices(self, factors, head_factor, offsets, head_offset, maps):
+        """Per-joint bind-frame stretch ``S (J, 4, 4)``: ``scale * stretch @ L`` (class docstring),
+        ``offsets (J, 3)``, ``head_offset (3,)`` the shaped ones, ``maps (J, 3, 3)`` the shape's."""
         kids = children_of(PARENTS)
         S = np.zeros((NUM_JOINTS, 4, 4))
         for j in range(NUM_JOINTS):
             lin = np.eye(3)
-            stretches = [(self.base_offsets[c], factors[c]) for c in kids[j]]
+            stretches = [(offsets[c], factors[c]) for c in kids[j]]
             if j == JOINT_ID["neck"]:
-                stretches.append((self.base_head_offset, head_factor))
+                stretches.append((head_offset, head_factor))
             bind_rot = self.mesh.inverse_bind[j, :3, :3]
             for vec, f in stretches:
                 n = np.linalg.norm(vec)
                 if f != 1.0 and n > 0:
                     d = bind_rot @ (vec / n)
                     lin = lin + (f - 1.0) * np.outer(d, d)
+            # the shape's map is given in the model frame: move it into the joint's bind frame
+            lin = lin @ (bind_rot @ maps[j] @ bind_rot.T)
             S[j, :3, :3] = self.scale * lin
             S[j, 3, 3] = 1.0
         return S
@@ -203,6 +235,70 @@ class BodyModel:
         if self._rest_vertices is None:
             self._rest_vertices = self.posed_vertices(np.zeros(DOF))
         return self._rest_vertices
+
+    @property
+    def reference_mesh(self):
+        """The mesh that defines :attr:`height` (the full one for the default body)."""
+        return self._height_mesh
+
+    def segment_lengths(self) -> dict:
+        """Segment lengths in metres (:func:`depthtrack.body.shape.segment_lengths`)."""
+        return segment_lengths(self)
+
+    def to_dict(self) -> dict:
+        """What rebuilds this body (:meth:`from_json`) and what it measures; JSON-serialisable."""
+        return {"format": BODY_FORMAT, "mesh": self.mesh_name, "height_m": round(self.height, 5),
+                "scale": self.scale, "shape": self.shape.to_dict(),
+                "segment_scale": {k: float(v) for k, v in self.segment_scale.items()},
+                "segment_lengths_m": self.segment_lengths()}
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text (a track's ``body.json``)."""
+        return json.dumps(self.to_dict(), indent=1) + "\n"
+
+    @classmethod
+    def from_json(cls, source):
+        """Rebuild a default-mesh body from ``body.json`` (a path) or its text / dict.
+
+        Raises
+        ------
+        InputError
+            Unreadable file, wrong format, a body not built on the shipped default mesh.
+        """
+        from ..errors import InputError
+
+        path = None
+        data = source
+        if not isinstance(source, dict):
+            text = str(source)
+            if not text.lstrip().startswith("{"):
+                path = Path(source)
+                try:
+                    text = path.read_text(encoding="utf-8")
+                except OSError as exc:
+                    raise InputError(path, f"cannot read body: {exc.strerror or exc}") from None
+            try:
+                data = json.loads(text)
+            except json.JSONDecodeError as exc:
+                raise InputError(path, f"not valid JSON: {exc.msg} (line {exc.lineno})") from None
+        if not isinstance(data, dict) or data.get("format") != BODY_FORMAT:
+            raise InputError(path, f"not a body file (expected \"format\": \"{BODY_FORMAT}\")")
+        mesh = data.get("mesh", "full")
+        if mesh not in DEFAULT_MESH_FILES:
+            raise InputError(path, f"the body was built on mesh {mesh!r}; only the shipped meshes "
+                                   f"({', '.join(DEFAULT_MESH_FILES)}) can be rebuilt")
+        shape = BodyShape.from_dict(data.get("shape") or {}, path)
+        seg = data.get("segment_scale") or {}
+        scale = data.get("scale")
+        try:
+            body = cls.default(mesh="full")._copy(shape=shape, segment_scale=seg, scale=1.0)
+            if isinstance(scale, (int, float)) and scale > 0:
+                body = body._copy(scale=float(scale))
+            else:
+                body = body.scaled(height=float(data["height_m"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InputError(path, f"bad body description: {exc}") from None
+        return body if mesh == "full" else body.with_mesh(mesh)
 
     @property
     def height(self):
@@ -260,5 +356,6 @@ class BodyModel:
         return out[0] if single else out
 
     def __repr__(self):
-        return (f"BodyModel(height={self.height:.3f} m, mesh={self.mesh_name!r}: "
+        shaped = "" if self.shape.is_average else ", shaped"
+        return (f"BodyModel(height={self.height:.3f} m{shaped}, mesh={self.mesh_name!r}: "
                 f"{self.mesh.num_vertices} vertices, {self.mesh.num_faces} faces)")

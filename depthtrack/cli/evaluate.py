@@ -14,6 +14,7 @@ _EPILOG = """examples:
   depthtrack eval seqs/walk seqs/run --methods hc,hc+ep --report eval-report
   depthtrack eval seqs/walk --likelihood pixel --json > walk.json
   depthtrack eval seqs/walk seqs/walk --track out/walk_hc out/walk_hcep --json
+  depthtrack eval my_recording --track out/my_recording     # no ground truth: fit figures only
 
 Overall figures average the sequences, each weighing the same (frames: the total).
 Results go to stdout (a table, or JSON with --json); progress to stderr."""
@@ -22,17 +23,22 @@ Results go to stdout (a table, or JSON with --json); progress to stderr."""
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "eval",
-        help="score tracking methods against the ground truth of depth sequences",
+        help="score tracking methods against ground truth, and by how well the body explains the depth",
         description="Track each sequence with each method (or read existing track outputs with "
                     "--track) and score the result against the sequence's ground truth: mean "
                     "joint error, the worst joint's error averaged over frames, the fraction of "
                     "joints within 10 cm, the paper's average and maximum marker errors (when the "
                     "sequence has markers) and frames per second; per sequence and averaged over "
-                    "sequences (each sequence weighing the same).",
+                    "sequences (each sequence weighing the same). Every sequence, with or without "
+                    "ground truth, also gets fit figures: silhouette IoU of the person's foreground "
+                    "and the fitted body's render, the share of the person's pixels left "
+                    "unexplained and the median depth residual (accuracy fields are null without "
+                    "ground truth); synthetic sequences made with --shape also get the fitted "
+                    "body's segment-length errors (from the track's body.json when it has one).",
         epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("sequences", nargs="+", metavar="SEQ",
-                   help="sequence directory (or .npz, or any readable recording) with ground-truth "
-                        "joints and/or markers")
+                   help="sequence directory (or .npz, or any readable recording); ground-truth "
+                        "joints and/or markers give the accuracy figures")
     p.add_argument("--methods", default=None,
                    help="comma-separated tracking methods from hc, ep, hc+ep (default: all three; "
                         "not with --track)")

@@ -11,10 +11,14 @@ _EPILOG = """examples:
   depthtrack synth walk.bvh seq_walk --seconds 1 --camera kinect-v2
   depthtrack synth 126_01.bvh seq_swim --units cmu --fps 30 --start 2 --seconds 10
   depthtrack synth --procedural mixed seq_demo --noise none
+  depthtrack synth walk.bvh seq_person3 --shape random --shape-seed 3 --clothing loose
+  depthtrack synth --procedural wave seq_me --shape my_shape.json --height 1.82
 
 The output is a sequence directory (or a single .npz when OUT ends in .npz) with
 ground-truth joints and Plug-in Gait surface markers; sequence.json records every
-setting under "synth" (camera placement, noise parameters, seed, source)."""
+setting under "synth" (camera placement, noise parameters, seed, source) and, under
+"synth.shape", the subject's build (relative scales, segment lengths in metres, clothing):
+ground truth for evaluation, never read by the tracker."""
 
 
 def register(subparsers) -> None:
@@ -43,7 +47,18 @@ def register(subparsers) -> None:
                    help="turn the camera about the subject from straight in front (degrees)")
     p.add_argument("--camera-height", type=number(0, 20, lo_open=True), default=None, metavar="M",
                    help="camera height above the floor (default 0.72 x subject height, chest)")
-    p.add_argument("--height", type=SUBJECT_HEIGHT, default=1.75, metavar="M", help="subject height (default 1.75)")
+    p.add_argument("--height", type=SUBJECT_HEIGHT, default=None, metavar="M",
+                   help="subject height (default 1.75, or the height --shape random draws)")
+    p.add_argument("--shape", default="average", metavar="average|random|FILE.json",
+                   help="the subject's proportions: average (the default body), random (a "
+                        "plausible adult drawn with --shape-seed, height 1.50-2.00 m), or a JSON "
+                        "file of relative scales such as {\"thigh\": 1.05, \"torso_girth\": 1.2} "
+                        "(fields: depthtrack.body.shape) or a track's body.json")
+    p.add_argument("--shape-seed", type=SEED, default=None, metavar="N",
+                   help="seed of --shape random and of loose clothing (default 0)")
+    p.add_argument("--clothing", choices=("none", "tight", "loose"), default="none",
+                   help="clothing over trunk and legs: tight (5 mm) or loose (1-4 cm offset "
+                        "surface); default none")
     p.add_argument("--noise", choices=("tof", "none"), default="tof", help="noise model (default tof)")
     p.add_argument("--seed", type=SEED, default=0, help="noise random seed (default 0)")
     p.add_argument("--units", default=None,
@@ -71,9 +86,13 @@ def run(args) -> int:
     args.out = out                                  # ranges were checked by argparse
     check_output(args, "out", inputs=[None if args.procedural else motion], option="OUT",
                  kind="file" if str(out).lower().endswith(".npz") else "dir")
+    from ..synth.subject import make_subject
+
+    body, subject = make_subject(args.height, args.shape, args.shape_seed, args.clothing)
     common = dict(fps=args.fps, start=args.start, seconds=args.seconds, camera=args.camera,
-                  distance=args.distance, azimuth=args.azimuth, height=args.height,
-                  noise=args.noise, seed=args.seed, camera_height=args.camera_height, quiet=args.quiet)
+                  distance=args.distance, azimuth=args.azimuth, height=body.height,
+                  noise=args.noise, seed=args.seed, camera_height=args.camera_height, quiet=args.quiet,
+                  body=body, subject=subject)
     t0 = time.perf_counter()
     if args.procedural:
         synth = synthesize_procedural(args.procedural, out, **common)

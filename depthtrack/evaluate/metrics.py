@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .fit import FIT_KEYS
+
 #: A joint closer than this to its ground truth counts as "within" (metres).
 WITHIN_THRESHOLD_M = 0.10
 
@@ -163,7 +165,7 @@ def frames_per_second(frames: int, seconds) -> float:
 
 
 def summarize(joint_err, frames: int, seconds=None, marker_err=None,
-              threshold: float = WITHIN_THRESHOLD_M) -> dict:
+              threshold: float = WITHIN_THRESHOLD_M, fit=None, shape=None) -> dict:
     """The summary figures of one track of one sequence.
 
     Parameters
@@ -176,11 +178,17 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
         Tracking time, for the rate.
     marker_err : (F, M) float or None
         From :func:`marker_errors`; ``None`` when the sequence has no markers.
+    fit : dict or None
+        :func:`depthtrack.evaluate.fit.summarize_fit` (no ground truth needed).
+    shape : dict or None
+        :func:`depthtrack.evaluate.fit.shape_errors` (synthetic sequences with a shape).
 
     Returns
     -------
     dict with ``frames, fps, mean_error_m, max_error_m, within_10cm,
-    marker_mean_error_m, marker_max_error_m``; unknown values are ``None``.
+    marker_mean_error_m, marker_max_error_m, silhouette_iou, unexplained_fraction,
+    median_depth_residual_m, segment_length_error_m`` (:data:`METRIC_KEYS`) and, with
+    ``shape``, ``segment_length_errors_m`` {segment: metres}; unknown values are ``None``.
     """
     def finite_or_none(x):
         return float(x) if x is not None and np.isfinite(x) else None
@@ -193,12 +201,15 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
         "within_10cm": finite_or_none(fraction_within(joint_err, threshold)),
         "marker_mean_error_m": None if marker_err is None else finite_or_none(average_marker_error(marker_err)),
         "marker_max_error_m": None if marker_err is None else finite_or_none(max_marker_error(marker_err)),
+        **{k: finite_or_none((fit or {}).get(k)) for k in FIT_KEYS},
+        "segment_length_error_m": finite_or_none((shape or {}).get("segment_length_error_m")),
+        **({"segment_length_errors_m": shape.get("segment_length_errors_m")} if shape else {}),
     }
 
 
 #: Keys of :func:`summarize`'s result, in report order.
 METRIC_KEYS = ("frames", "fps", "mean_error_m", "max_error_m", "within_10cm",
-               "marker_mean_error_m", "marker_max_error_m")
+               "marker_mean_error_m", "marker_max_error_m", *FIT_KEYS, "segment_length_error_m")
 
 
 def average_summaries(summaries) -> dict:

@@ -8,8 +8,10 @@ Report directory (written as a whole, atomically)::
 
     REPORT/metrics.json          {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}}
     REPORT/report.md             tables of the same figures, and the plots
-    REPORT/errors.csv            sequence,method,frame,mean_error_m,max_error_m,marker_mean_error_m,marker_max_error_m
+    REPORT/errors.csv            sequence,method,frame,mean_error_m,max_error_m,marker_mean_error_m,marker_max_error_m,
+                                 silhouette_iou,unexplained_fraction,median_depth_residual_m
     REPORT/error_over_time.png   per sequence: mean (solid) and worst-joint (dashed) error per frame, per method
+    REPORT/fit_over_time.png     per sequence: silhouette IoU (solid) and unexplained share (dashed) per frame
     REPORT/joint_errors.png      mean error of each contract joint, per method
     REPORT/methods.png           the paper's results figure: methods side by side per sequence
 """
@@ -31,7 +33,7 @@ from . import metrics
 METHOD_COLOURS = {"hc": "tab:blue", "ep": "tab:orange", "hc+ep": "tab:green"}
 _EXTRA_COLOURS = ("tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan")
 
-PLOT_FILES = ("error_over_time.png", "joint_errors.png", "methods.png")
+PLOT_FILES = ("error_over_time.png", "joint_errors.png", "methods.png", "fit_over_time.png")
 
 
 def method_colour(method: str, methods) -> str:
@@ -87,6 +89,35 @@ def plot_error_over_time(evaluation) -> Figure:
         ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, ncol=min(3, 2 * len(methods)), loc="upper left")
+    axes[-1].set_xlabel("frame")
+    return fig
+
+
+def plot_fit_over_time(evaluation) -> Figure:
+    """One panel per sequence: how well each method's fitted body explains the depth per frame.
+
+    Solid lines: silhouette IoU; dashed: the share of the person's pixels left unexplained
+    (:mod:`depthtrack.evaluate.fit`); so each panel holds ``2 * methods`` lines (a method
+    without fit figures draws empty lines). Needs no ground truth.
+    """
+    sequences, methods = evaluation.sequences, evaluation.methods
+    fig = _new_figure(8, 2.4 * len(sequences) + 0.6)
+    axes = fig.subplots(len(sequences), 1, squeeze=False)[:, 0]
+    for ax, name in zip(axes, sequences):
+        for method in methods:
+            r = evaluation.get(name, method)
+            if r is None:
+                continue
+            fit = r.fit if r.fit is not None else np.full((len(r.joints), 3), np.nan)
+            frames = np.arange(len(fit))
+            colour = method_colour(method, methods)
+            ax.plot(frames, fit[:, 0], color=colour, lw=1.5, label=f"{method} IoU")
+            ax.plot(frames, fit[:, 1], color=colour, lw=1.0, ls="--", label=f"{method} unexplained")
+        ax.set_title(name, fontsize=10)
+        ax.set_ylabel("fraction")
+        ax.set_ylim(0, 1)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=min(3, 2 * len(methods)), loc="center left")
     axes[-1].set_xlabel("frame")
     return fig
 
@@ -209,6 +240,22 @@ def _fps(value):
     return "n/a" if value is None else f"{value:.2f}"
 
 
+def _frac(value, digits=2):
+    return "n/a" if value is None else f"{value:.{digits}f}"
+
+
+def fit_markdown_table(rows) -> str:
+    """Markdown table of the fit figures of ``rows``: iterable of (label, method, M)."""
+    lines = ["| sequence | method | silhouette IoU | unexplained | median depth residual (cm) | "
+             "segment length error (cm) |",
+             "|---|---|---:|---:|---:|---:|"]
+    for label, method, m in rows:
+        lines.append(f"| {label} | {method} | {_frac(m.get('silhouette_iou'))} | "
+                     f"{_pct(m.get('unexplained_fraction'))} | {_cm(m.get('median_depth_residual_m'))} | "
+                     f"{_cm(m.get('segment_length_error_m'))} |")
+    return "\n".join(lines) + "\n"
+
+
 def markdown_table(rows) -> str:
     """Markdown table of ``rows``: iterable of (label, method, M)."""
     lines = ["| sequence | method | frames | mean error (cm) | max error (cm) | within 10 cm | "
@@ -243,6 +290,17 @@ def format_markdown(evaluation, data=None) -> str:
         "tracked per second of wall-clock time. The *all* rows average the sequences, each "
         "sequence weighing the same (frames: the total).",
         "",
+        "## Fit to the depth (no ground truth needed)",
+        "",
+        fit_markdown_table(rows + overall),
+        "*silhouette IoU*: overlap of the person's foreground (the tracker's segmentation) and "
+        "the fitted body's render, mean over frames (1 = exact); *unexplained*: share of the "
+        "person's pixels that the body does not cover within 10 cm of their depth, mean over "
+        "frames; *median depth residual*: median |observed - rendered| where both exist "
+        "(median over frames); *segment length error*: median over segments of |fitted - true| "
+        "length, only for synthetic sequences made with a shape (`synth.shape`). A good fit of "
+        "a real person: IoU at least 0.85 and at most 8 % unexplained.",
+        "",
         "## Plots",
         "",
         "![methods per sequence](methods.png)",
@@ -251,6 +309,8 @@ def format_markdown(evaluation, data=None) -> str:
         "",
         "![error per joint](joint_errors.png)",
         "",
+        "![fit over time](fit_over_time.png)",
+        "",
         "Per-frame errors: `errors.csv`.",
         "",
     ])
@@ -258,7 +318,8 @@ def format_markdown(evaluation, data=None) -> str:
 
 def format_errors_csv(evaluation) -> str:
     """Per-frame errors of every (sequence, method) as CSV text."""
-    out = ["sequence,method,frame,mean_error_m,max_error_m,marker_mean_error_m,marker_max_error_m"]
+    out = ["sequence,method,frame,mean_error_m,max_error_m,marker_mean_error_m,marker_max_error_m,"
+           "silhouette_iou,unexplained_fraction,median_depth_residual_m"]
 
     def cell(v):
         return "" if not np.isfinite(v) else f"{v:.6f}"
@@ -269,9 +330,11 @@ def format_errors_csv(evaluation) -> str:
             mmean, mworst = metrics.per_frame_mean(r.marker_errors), metrics.per_frame_max(r.marker_errors)
         else:
             mmean = mworst = np.full(len(mean), np.nan)
+        fit = r.fit if r.fit is not None else np.full((len(mean), 3), np.nan)
         for f in range(len(mean)):
             out.append(f"{r.sequence},{r.method},{f},{cell(mean[f])},{cell(worst[f])},"
-                       f"{cell(mmean[f])},{cell(mworst[f])}")
+                       f"{cell(mmean[f])},{cell(mworst[f])},{cell(fit[f, 0])},{cell(fit[f, 1])},"
+                       f"{cell(fit[f, 2])}")
     return "\n".join(out) + "\n"
 
 
@@ -279,13 +342,14 @@ def format_text_table(evaluation, data=None) -> str:
     """A plain-text table for the terminal."""
     data = data or evaluation.to_dict()
     header = f"{'sequence':<20} {'method':<7} {'frames':>6} {'mean cm':>8} {'max cm':>8} {'<10cm':>6} " \
-             f"{'mk avg':>7} {'mk max':>7} {'fps':>7}"
+             f"{'mk avg':>7} {'mk max':>7} {'fps':>7} {'IoU':>5} {'unexpl':>6}"
     lines = [header, "-" * len(header)]
 
     def row(label, method, m):
         return (f"{label:<20} {method:<7} {m['frames']:>6} {_cm(m['mean_error_m']):>8} "
                 f"{_cm(m['max_error_m']):>8} {_pct(m['within_10cm']):>6} {_cm(m['marker_mean_error_m']):>7} "
-                f"{_cm(m['marker_max_error_m']):>7} {_fps(m['fps']):>7}")
+                f"{_cm(m['marker_max_error_m']):>7} {_fps(m['fps']):>7} "
+                f"{_frac(m.get('silhouette_iou')):>5} {_pct(m.get('unexplained_fraction')):>6}")
 
     for name, per in data["sequences"].items():
         for method, m in per.items():
@@ -306,7 +370,8 @@ def write_report(evaluation, out_dir) -> dict:
     data = evaluation.to_dict()
     figures = {"error_over_time.png": plot_error_over_time(evaluation),
                "joint_errors.png": plot_joint_errors(evaluation),
-               "methods.png": plot_methods(evaluation)}
+               "methods.png": plot_methods(evaluation),
+               "fit_over_time.png": plot_fit_over_time(evaluation)}
     files = {
         "metrics.json": json.dumps(data, indent=1) + "\n",
         "report.md": format_markdown(evaluation, data),
@@ -322,6 +387,7 @@ def write_report(evaluation, out_dir) -> dict:
     return {name: out_dir / name for name in (*files, *figures)}
 
 
-__all__ = ["plot_error_over_time", "plot_joint_errors", "plot_methods", "per_joint_means",
+__all__ = ["plot_error_over_time", "plot_joint_errors", "plot_methods", "plot_fit_over_time",
+           "fit_markdown_table", "per_joint_means",
            "figure_png", "markdown_table", "format_markdown", "format_errors_csv",
            "format_text_table", "write_report", "PLOT_FILES", "METHOD_COLOURS"]

@@ -1,7 +1,9 @@
 """Batch evaluation: track (or read tracks of) sequences with several methods and score them.
 
 Each sequence is scored against its own ground truth (``groundtruth/joints.csv`` and,
-when present, ``groundtruth/markers.csv``). The result is one :class:`MethodResult` per
+when present, ``groundtruth/markers.csv``) when it has one, and always by how well the
+fitted body explains the depth (:mod:`.fit`: silhouette IoU, unexplained share, depth
+residual), so recordings without ground truth are scored too. The result is one :class:`MethodResult` per
 (sequence, method) plus the per-sequence and overall summaries that ``depthtrack eval``
 prints and writes.
 
@@ -51,6 +53,9 @@ class MethodResult:
         The body the poses belong to.
     track_summary : dict
         The tracker's own summary (its summary.json for ``--track`` outputs).
+    fit : (F, 3) float or None
+        Per-frame fit figures (:func:`depthtrack.evaluate.fit.track_fit`): silhouette IoU,
+        unexplained share, median depth residual; NaN where undefined.
     """
 
     sequence: str
@@ -64,6 +69,7 @@ class MethodResult:
     poses: np.ndarray | None = None
     body: object = None
     track_summary: dict = field(default_factory=dict)
+    fit: np.ndarray | None = None
 
 
 @dataclass
@@ -119,17 +125,19 @@ def sequence_name(path) -> str:
     return path.resolve().name or str(path)
 
 
-def open_with_ground_truth(path, **options):
-    """Open a sequence and check that it carries ground truth to score against.
+def open_with_ground_truth(path, require: bool = True, **options):
+    """Open a sequence and (with ``require``) check that it carries ground truth to score against.
 
     Raises
     ------
     InputError
-        Missing/malformed sequence, or no known ground-truth joint or marker.
+        Missing/malformed sequence, or (with ``require``) no known ground-truth joint or marker.
     """
     from ..io.sequence import open_sequence
 
     seq = open_sequence(path, **options)
+    if not require:
+        return seq
     joints, markers = seq.joints, seq.markers
     has_joints = joints is not None and np.isfinite(joints).all(axis=-1).any()
     has_markers = markers is not None and np.isfinite(markers).all(axis=-1).any()
@@ -154,6 +162,15 @@ def check_methods(methods) -> list:
         if m not in METHODS:
             raise InputError(None, f"unknown method {m!r}; choose from {', '.join(METHODS)}")
     return methods
+
+
+def body_for_track_dir(track_dir, track):
+    """The body of a track output: its ``body.json`` (the fitted shape) when present, else
+    :func:`body_for_track`."""
+    from ..body import BodyModel
+
+    path = Path(track_dir) / "body.json"
+    return BodyModel.from_json(path) if path.is_file() else body_for_track(track)
 
 
 def body_for_track(track):
@@ -198,7 +215,7 @@ def summary_seconds(summary: dict, frames: int):
 
 
 # ------------------------------------------------------------------ scoring
-def score(name, method, seq, joints, poses=None, body=None, seconds=None) -> MethodResult:
+def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=None) -> MethodResult:
     """Score one track of one sequence.
 
     Parameters
@@ -213,7 +230,12 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None) -> Met
     body : BodyModel or None
     seconds : float or None
         Tracking time.
+    masks : list of (H, W) bool or None
+        The person's foreground per frame (:func:`depthtrack.evaluate.fit.person_masks`),
+        for the fit figures; computed when None and ``poses`` and ``body`` are given.
     """
+    from . import fit as fit_figures
+
     F = len(seq)
     joints = np.asarray(joints, float)
     if joints.shape != (F, 15, 3):
@@ -227,8 +249,15 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None) -> Met
             cols = [list(seq.marker_names).index(n) for n in names]
             model = marker_positions(body, poses, names)
             marker_err = metrics.marker_errors(model, seq.markers[:, cols])
-    summary = metrics.summarize(joint_err, F, seconds, marker_err)
-    return MethodResult(name, method, joints, joint_err, marker_err, names, seconds, summary, poses, body)
+    per_frame = None
+    if poses is not None and body is not None:
+        per_frame = fit_figures.track_fit(seq, poses, body, masks)
+    shape = fit_figures.shape_errors(body, fit_figures.shape_truth(seq))
+    summary = metrics.summarize(joint_err, F, seconds, marker_err,
+                                fit=None if per_frame is None else fit_figures.summarize_fit(per_frame),
+                                shape=shape if shape["segment_length_errors_m"] else None)
+    return MethodResult(name, method, joints, joint_err, marker_err, names, seconds, summary, poses, body,
+                        fit=per_frame)
 
 
 def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool = True):
@@ -264,7 +293,8 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
     Parameters
     ----------
     sequence_paths : sequence of path-like
-        Sequence directories or ``.npz`` files, each with ground truth.
+        Sequence directories or ``.npz`` files; without ground truth only the fit figures
+        are known (accuracy fields None).
     methods : sequence of str
         Tracking methods from :data:`METHODS` (ignored with ``track_dirs``).
     likelihood : {"smoothed", "pixel"}
@@ -282,8 +312,8 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
     Raises
     ------
     InputError
-        Before any work is done: a missing sequence, one without ground truth, an unknown
-        method, a track that does not match its sequence.
+        Before any work is done: a missing sequence, an unknown method, a track that does
+        not match its sequence.
     """
     if likelihood not in LIKELIHOODS:
         raise InputError(None, f"unknown likelihood {likelihood!r}; choose from {', '.join(LIKELIHOODS)}")
@@ -294,7 +324,7 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
     for p in sequence_paths:
         key = str(p.resolve())
         if key not in sequences:
-            sequences[key] = open_with_ground_truth(p, **(open_options or {}))
+            sequences[key] = open_with_ground_truth(p, require=False, **(open_options or {}))
     names = {}
     for p in sequence_paths:
         name = sequence_name(p)
@@ -302,6 +332,16 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
         if other != str(p.resolve()):
             raise InputError(p, f"another sequence is also named {name!r}; names must be unique")
     log = log or (lambda line: None)
+    masks = {}
+
+    def masks_of(seq):
+        """The person's foreground per frame, segmented once per sequence for all methods."""
+        from .fit import person_masks
+
+        key = str(seq.path)
+        if key not in masks:
+            masks[key] = person_masks(seq)
+        return masks[key]
 
     results = []
     if track_dirs is not None:
@@ -323,11 +363,12 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
             if key in seen:
                 raise InputError(track_dir, f"a second {method!r} track of {key[0]!r}")
             seen.add(key)
-            jobs.append((key, seq, track))
-        for (name, method), seq, track in jobs:
-            body = body_for_track(track) if track.poses.shape[1] == 48 else None
+            jobs.append((key, seq, track, track_dir))
+        for (name, method), seq, track, track_dir in jobs:
+            body = body_for_track_dir(track_dir, track) if track.poses.shape[1] == 48 else None
             result = score(name, method, seq, track.joints, track.poses, body,
-                           summary_seconds(track.summary, len(track.poses)))
+                           summary_seconds(track.summary, len(track.poses)),
+                           masks=masks_of(seq) if body is not None else None)
             result.track_summary = dict(track.summary)
             log(_line(result))
             results.append(result)
@@ -338,7 +379,8 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
         seq = sequences[str(p.resolve())]
         for method in methods:
             joints, poses, body, seconds, summary = track_sequence(seq, method, likelihood, quiet)
-            result = score(sequence_name(p), method, seq, joints, poses, body, seconds)
+            result = score(sequence_name(p), method, seq, joints, poses, body, seconds,
+                           masks=masks_of(seq))
             result.track_summary = dict(summary)
             log(_line(result))
             results.append(result)
@@ -354,6 +396,8 @@ def _line(r: MethodResult) -> str:
     return (f"{r.sequence} {r.method}: mean {_fmt(s['mean_error_m'], 100, ' cm')}, "
             f"max {_fmt(s['max_error_m'], 100, ' cm')}, within 10 cm {_fmt(s['within_10cm'], 100, '%', 0)}, "
             f"markers {_fmt(s['marker_mean_error_m'], 100, ' cm')}/{_fmt(s['marker_max_error_m'], 100, ' cm')}, "
+            f"IoU {_fmt(s.get('silhouette_iou'), 1, '', 2)}, "
+            f"unexplained {_fmt(s.get('unexplained_fraction'), 100, '%', 0)}, "
             f"{_fmt(s['fps'], 1, ' fps')}")
 
 
@@ -363,5 +407,5 @@ def print_line(line: str) -> None:
 
 
 __all__ = ["METHODS", "LIKELIHOODS", "MethodResult", "Evaluation", "sequence_name",
-           "open_with_ground_truth", "check_methods", "body_for_track", "summary_seconds", "score",
+           "open_with_ground_truth", "check_methods", "body_for_track", "body_for_track_dir", "summary_seconds", "score",
            "track_sequence", "evaluate"]

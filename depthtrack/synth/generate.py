@@ -42,7 +42,7 @@ def ground_truth(body, poses, vertices):
 
 def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=None, azimuth=0.0,
                camera_height=None, noise="tof", seed=0, depth_scale=0.001, source=None,
-               quiet=True, renderer=None) -> dict:
+               quiet=True, renderer=None, subject=None) -> dict:
     """Render, add noise and write a synthetic sequence.
 
     Parameters
@@ -64,6 +64,9 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
         What the poses came from, stored in ``synth.source``.
     renderer : FrameRenderer or None
         Reused when given (must match the camera).
+    subject : dict or None
+        The subject's build (:func:`depthtrack.synth.subject.make_subject`'s description),
+        written as ``synth.shape``: ground truth for evaluation, never read by the tracker.
 
     Returns
     -------
@@ -120,6 +123,8 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
         "markers": {"placement": "Plug-in Gait names, one mesh vertex each",
                     "vertices": [int(v) for v in vertices]},
     }
+    if subject is not None:
+        synth["shape"] = dict(subject)
     from ..io.sequence import write_sequence
 
     write_sequence(out, frames(), cam, fps, depth_scale=depth_scale, joints=joints, markers=markers,
@@ -139,7 +144,8 @@ def _window(poses, fps, start, seconds, path=None):
 
 def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                    distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0, units=None,
-                   camera_height=None, quiet=True, body=None, skip_leading_jump=True) -> dict:
+                   camera_height=None, quiet=True, body=None, skip_leading_jump=True,
+                   subject=None) -> dict:
     """Synthesize a sequence from a BVH file (see :func:`synthesize`).
 
     The motion is retargeted onto the default body of the given height (full mesh),
@@ -175,12 +181,13 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
               "retarget": {"method": "bone directions, twist from BVH, hip centre follows BVH",
                            "root_scale": round(scale, 6)}}
     return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
-                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet)
+                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
+                      subject=subject)
 
 
 def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                           distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0,
-                          camera_height=None, quiet=True, body=None) -> dict:
+                          camera_height=None, quiet=True, body=None, subject=None) -> dict:
     """Synthesize a sequence from a built-in motion (see :mod:`depthtrack.synth.procedural`)."""
     from ..body import BodyModel
     from .procedural import PROCEDURAL_MOTIONS, procedural_motion
@@ -194,4 +201,5 @@ def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="
     source = {"kind": "procedural", "name": name, "start_s": start,
               "seconds": None if seconds is None else float(seconds)}
     return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
-                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet)
+                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
+                      subject=subject)

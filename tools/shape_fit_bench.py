@@ -1,0 +1,153 @@
+"""How well the shape fit recovers random people's segment lengths from tracked frames.
+
+For each person ``k`` (``--shape random --shape-seed k``, optionally clothed), a held-out
+test motion (``depthtrack/data/motion_split.json``, cycled) is synthesized with ToF noise
+(SR4000 and Kinect v2 alternately); the tracker ("hc", the template body at the sequence's
+height, automatic initialisation) tracks the first ``--frames`` frames; four of them
+(spread evenly) with the tracker's segmentation and poses go to
+:func:`depthtrack.track.shape_fit.fit_shape` -- what a tracker does after its first
+frames. Printed: per person the median and worst segment-length error of the template and
+of the fitted body, and the median over everybody. No figure here is tuned on test.
+
+    PYTHONPATH=. python tools/shape_fit_bench.py ../shared/data OUT_DIR [--people 10]
+        [--clothing none|tight|loose] [--frames 16] [--json]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from depthtrack.body import BodyModel
+from depthtrack.body.shape import LENGTH_FIELDS, length_errors
+from depthtrack.io.sequence import open_sequence
+from depthtrack.synth.generate import synthesize_bvh
+from depthtrack.synth.subject import make_subject
+from depthtrack.track.shape_fit import fit_shape
+from depthtrack.track.tracker import Tracker
+
+CAMERAS = ("sr4000", "kinect-v2")
+
+
+def track_first_frames(seq, body, frames):
+    """Poses, masks, floor planes and depths of the first ``frames`` frames tracked with "hc"."""
+    tracker = Tracker(body, seq.camera, method="hc", fps=seq.fps)
+    try:
+        depths = [seq.depth(i) for i in range(min(frames, len(seq)))]
+        poses, masks, planes = [tracker.init(depths[0])], [], []
+        masks.append(tracker.foreground.mask.copy())
+        planes.append(tracker.foreground.floor_plane)
+        for d in depths[1:]:
+            poses.append(tracker.step(d))
+            masks.append(tracker.foreground.mask.copy())
+            planes.append(tracker.foreground.floor_plane)
+    finally:
+        for r in (tracker.coarse_renderer, tracker.fine_renderer, tracker._frame_renderer):
+            if r is not None:
+                r.release()
+    return np.array(poses), masks, planes, depths
+
+
+def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior_weight=1.0):
+    person, info = make_subject(None, "random", k, clothing)
+    seq_dir = out_dir / f"person{k:02d}"
+    synthesize_bvh(motion, seq_dir, fps=25.0, start=1.0, seconds=frames / 25.0 + 0.2,
+                   camera=camera, noise="tof", seed=k, body=person, subject=info)
+    seq = open_sequence(seq_dir)
+    template = BodyModel.default(height=seq.subject_height)
+    poses, masks, planes, depths = track_first_frames(seq, template, frames)
+    pick = np.unique(np.linspace(0, len(poses) - 1, fit_frames).round().astype(int))
+    t = time.perf_counter()
+    fit = fit_shape(template, seq.camera, [depths[i] for i in pick], [masks[i] for i in pick],
+                    poses[pick], [planes[i] for i in pick], prior_weight=prior_weight)
+    seconds = time.perf_counter() - t
+    truth = info["segment_lengths_m"]
+    from depthtrack.evaluate.fit import frame_fit
+    from depthtrack.render import FrameRenderer
+
+    r = FrameRenderer(seq.camera)
+    try:
+        figures = {name: np.mean([frame_fit(masks[i], depths[i], r.render(b, p))
+                                  for i, p in zip(pick, ps)], axis=0).round(4).tolist()
+                   for name, b, ps in (("template", template, poses[pick]),
+                                       ("fitted", fit.body, fit.poses))}
+    finally:
+        r.release()
+    before = length_errors(template.segment_lengths(), truth)
+    after = length_errors(fit.body.segment_lengths(), truth)
+    row = {"person": k, "motion": Path(motion).name, "camera": camera, "height_m": info["height_m"],
+           "template_errors_m": before, "fitted_errors_m": after, "fit_seconds": round(seconds, 1),
+           "tile": fit.tile, "frames_used": pick.tolist(),
+           "fit_figures": figures}
+    return row
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("data", type=Path)
+    ap.add_argument("out", type=Path)
+    ap.add_argument("--people", type=int, default=10)
+    ap.add_argument("--clothing", default="none", choices=("none", "tight", "loose"))
+    ap.add_argument("--frames", type=int, default=16)
+    ap.add_argument("--json", action="store_true")
+    ap.add_argument("--split", default="test", choices=("train", "dev", "test"),
+                    help="motions of depthtrack/data/motion_split.json (tune on dev, report test)")
+    ap.add_argument("--fit-frames", type=int, default=4, help="frames given to the shape fit")
+    ap.add_argument("--prior-weight", type=float, default=30.0, help="fit_shape's prior_weight")
+    args = ap.parse_args(argv)
+    split = json.loads((Path(__file__).resolve().parents[1] / "depthtrack" / "data"
+                        / "motion_split.json").read_text())
+    motions = [args.data / m for m in split[args.split]]
+    from depthtrack.errors import InputError
+
+    rows, m = [], 0
+    for k in range(args.people):
+        while True:               # motions our BVH reader cannot map are skipped (and said so)
+            motion = motions[m % len(motions)]
+            m += 1
+            try:
+                row = run_person(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.frames,
+                                 args.fit_frames, args.prior_weight)
+                break
+            except InputError as exc:
+                print(f"skipped {motion.name}: {exc}", file=sys.stderr)
+        rows.append(row)
+        b = np.abs(list(row["template_errors_m"].values()))
+        a = np.abs(list(row["fitted_errors_m"].values()))
+        print(f"person {k:2d} {row['motion']:12s} {row['camera']:9s} h {row['height_m']:.2f} m: "
+              f"template median {100 * np.median(b):.1f} cm (worst {100 * b.max():.1f}), fitted "
+              f"median {100 * np.median(a):.1f} cm (worst {100 * a.max():.1f}), "
+              f"{row['fit_seconds']:.0f} s, tile {row['tile']}; IoU / unexplained template "
+              f"{row['fit_figures']['template'][0]:.3f} / {row['fit_figures']['template'][1]:.1%}, "
+              f"fitted {row['fit_figures']['fitted'][0]:.3f} / {row['fit_figures']['fitted'][1]:.1%}",
+              file=sys.stderr, flush=True)
+    allb = np.abs([r["template_errors_m"][s] for r in rows for s in LENGTH_FIELDS])
+    alla = np.abs([r["fitted_errors_m"][s] for r in rows for s in LENGTH_FIELDS])
+    per_segment = {s: round(float(np.median(np.abs([r["fitted_errors_m"][s] for r in rows]))), 4)
+                   for s in LENGTH_FIELDS}
+    summary = {"people": len(rows), "clothing": args.clothing, "split": args.split,
+               "fit_frames": args.fit_frames, "prior_weight": args.prior_weight,
+               "template_median_error_m": round(float(np.median(allb)), 4),
+               "fitted_median_error_m": round(float(np.median(alla)), 4),
+               "fitted_per_segment_median_m": per_segment,
+               "fit_figures_mean": {n: np.mean([r["fit_figures"][n] for r in rows], axis=0).round(4).tolist()
+                                    for n in ("template", "fitted")},
+               "rows": rows}
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    else:
+        print(f"median |segment length error| over {len(rows)} people x {len(LENGTH_FIELDS)} "
+              f"segments: template {100 * summary['template_median_error_m']:.1f} cm, fitted "
+              f"{100 * summary['fitted_median_error_m']:.1f} cm")
+        print("fitted, per segment (cm): " + ", ".join(f"{s} {100 * v:.1f}" for s, v in per_segment.items()))
+        for n, (iou, unexplained, residual) in summary["fit_figures_mean"].items():
+            print(f"{n}: silhouette IoU {iou:.3f}, unexplained {unexplained:.1%}, median depth "
+                  f"residual {100 * residual:.1f} cm (mean over people of the 4 fitted frames)")
+
+
+if __name__ == "__main__":
+    main()
