@@ -13,7 +13,7 @@ import sys
 from ..errors import InputError
 
 #: Modules under ``depthtrack.cli`` that contribute commands, in ``--help`` order.
-COMMAND_MODULES = ("demo", "synth", "track", "evaluate", "swim", "bench")
+COMMAND_MODULES = ("demo", "synth", "track", "export", "evaluate", "swim", "bench")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -16,6 +16,7 @@ _EPILOG = """methods (the ToF paper's experiments):
 examples:
   depthtrack track seq_walk -o track_walk
   depthtrack track seq_walk -o track_walk --method hc --likelihood pixel --overlay walk.mp4
+  depthtrack track seq_walk -o track_walk --export glb,c3d,json --smooth savgol:9
 
 OUT gets joints.csv, poses.npz, track.bvh and summary.json (method, settings, body height
 and where it came from, timings per stage, frames per second). The body height is read
@@ -23,7 +24,8 @@ from sequence.json (subject.height_m), or else fitted to the first frame with a 
 the likelihood (a few seconds). After the automatic start, the pose and its twin facing
 the other way are both tracked for ten frames and the better kept (a depth image barely
 tells front from back). Frames without a person (an empty room, the subject gone) get no
-pose; tracking starts again when someone appears."""
+pose; tracking starts again when someone appears. --export also writes OUT/exports/
+(track.glb, track.c3d, joints.json, ...; see `depthtrack export --help`)."""
 
 OVERLAY_SUFFIXES = (".mp4", ".gif")
 
@@ -45,6 +47,9 @@ def register(subparsers) -> None:
     p.add_argument("--init-from-groundtruth", action="store_true",
                    help="ABLATION ONLY: start from a pose fitted to the ground-truth joints of "
                         "frame 0 instead of the automatic initialisation (recorded in summary.json)")
+    from .export import add_export_options
+    add_export_options(p, "--export", "also write these formats into OUT/exports/: glb, gltf, c3d, json, "
+                                      "bvh, csv (comma-separated; see `depthtrack export`)")
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
     p.set_defaults(func=run)
 
@@ -67,6 +72,11 @@ def run(args) -> int:
     overlay = Path(args.overlay) if args.overlay else None
     if overlay is not None and overlay.suffix.lower() not in OVERLAY_SUFFIXES:
         raise InputError(overlay, "overlay must end in .mp4 or .gif")
+    if getattr(args, "formats", None):                 # check export options before tracking
+        from ..io.exports import parse_formats
+        from ..motion.smoothing import parse_smoothing
+        parse_formats(args.formats)
+        parse_smoothing(args.smooth)
     seq = open_sequence(args.sequence)
     t0 = time.perf_counter()
     with Progress(len(seq), "frames", quiet=args.quiet) as progress:
@@ -82,6 +92,13 @@ def run(args) -> int:
 
         written = write_overlay(overlay, seq, result.poses, body)
         summary["overlay"] = str(written)
+    if getattr(args, "formats", None):
+        from .export import export_track_outputs
+
+        exported = export_track_outputs(out / "exports", body, result.poses, result.joints, seq.fps,
+                                        args.formats, args.smooth, args.up)
+        if not args.quiet:
+            print("exports: " + ", ".join(str(p) for p in exported.values()), file=sys.stderr)
     if not args.quiet:
         t = summary["timings"]
         print(f"tracked {len(seq)} frames with {args.method} ({args.likelihood} likelihood) in "

@@ -135,7 +135,8 @@ def _smooth_run(run, smoothing, fps):
         window = min(int(smoothing.params[0]), n if n % 2 else n - 1)
         if window < 3:
             return run.copy()
-        return savgol_filter(run, window, polyorder=min(2, window - 1), axis=0, mode="interp")
+        # a quadratic through 3 points is no filter: short runs fit a line instead
+        return savgol_filter(run, window, polyorder=min(2, window - 2), axis=0, mode="interp")
     if smoothing.kind == "gaussian":
         from scipy.ndimage import gaussian_filter1d
         return gaussian_filter1d(run, smoothing.params[0], axis=0, mode="nearest")
