@@ -12,9 +12,19 @@ _EPILOG = """examples:
   depthtrack eval seqs/walk seqs/run --methods hc,hc+ep --report eval-report
   depthtrack eval seqs/walk --likelihood pixel --json > walk.json
   depthtrack eval seqs/walk seqs/walk --track out/walk_hc out/walk_hcep --json
+  depthtrack eval seqs/* --workers 2 --json > all.json          # 2 processes on this machine
+  depthtrack eval seqs/* --dask local --workers 4                # a Dask LocalCluster
+  depthtrack eval /lab/seqs/* --dask tcp://scheduler:8786 --tracks-out /lab/tracks
 
 Overall figures average the sequences, each weighing the same (frames: the total).
-Results go to stdout (a table, or JSON with --json); progress to stderr."""
+Results go to stdout (a table, or JSON with --json); progress to stderr.
+
+Batches: one task per sequence (all its methods), run in order here (default), in
+--workers N spawned processes, or on a Dask cluster (--dask ADDRESS, or --dask local for
+a LocalCluster of --workers processes, default 2); the figures are the same every way
+(fps aside). A sequence that fails is reported (stderr, and "failed" in --json) and the
+others go on. Exit status: 0 all done; 2 bad input (nothing run, or a sequence that could
+not be read: the rest still reported); 1 a sequence crashed (a bug or a lost worker)."""
 
 
 def register(subparsers) -> None:
@@ -43,6 +53,14 @@ def register(subparsers) -> None:
                    help="write metrics.json, report.md, errors.csv and plots into DIR (replaced)")
     p.add_argument("--json", action="store_true",
                    help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout')
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="track N sequences at once in spawned processes (with --dask local: its "
+                        "worker processes, default 2)")
+    p.add_argument("--dask", metavar="ADDRESS", default=None,
+                   help="run one task per sequence on a Dask cluster: a scheduler address "
+                        "(tcp://HOST:8786) or 'local' for a LocalCluster on this machine")
+    p.add_argument("--tracks-out", metavar="DIR", default=None,
+                   help="also write each track to DIR/SEQUENCE/METHOD/ (as `depthtrack track` does)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=run)
 
@@ -55,9 +73,20 @@ def run(args) -> int:
         raise InputError(None, "--methods and --track exclude each other (a track's method is in "
                                "its summary.json)")
     methods = METHODS if args.methods is None else args.methods.split(",")
+    if args.workers is not None and args.workers < 1:
+        raise InputError(None, f"--workers must be at least 1, not {args.workers}")
+    executor = "dask" if args.dask else ("workers" if args.workers else "serial")
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
                           track_dirs=args.track, quiet=args.quiet,
-                          log=None if args.quiet else print_line)
+                          log=None if args.quiet else print_line, executor=executor,
+                          workers=args.workers, dask_address=args.dask, tracks_out=args.tracks_out)
+    for failure in evaluation.failures:
+        print(f"depthtrack eval: {failure.message}" if failure.bad_input
+              else f"depthtrack eval: {failure.path}: {failure.message}", file=sys.stderr)
+        if failure.detail and not args.quiet:
+            print(failure.detail.rstrip(), file=sys.stderr)
+    if not evaluation.results:
+        return 2 if all(f.bad_input for f in evaluation.failures) else 1
     data = evaluation.to_dict()
     written = write_report(evaluation, args.report) if args.report else None
     if args.json:
@@ -67,4 +96,6 @@ def run(args) -> int:
     if written and not args.quiet:
         print(f"report: {args.report}/report.md (metrics.json, errors.csv, "
               f"{', '.join(n for n in written if n.endswith('.png'))})", file=sys.stderr)
+    if evaluation.failures:
+        return 2 if all(f.bad_input for f in evaluation.failures) else 1
     return 0
