@@ -33,6 +33,9 @@ from ..errors import InputError
 
 EXECUTORS = ("serial", "workers", "dask")
 
+#: How long to try reaching a Dask scheduler before giving up.
+DASK_CONNECT_TIMEOUT = "20s"
+
 
 @dataclass(frozen=True)
 class SequenceTask:
@@ -154,7 +157,7 @@ def _dask(tasks, address, workers):
             client = Client(cluster)
         else:
             try:
-                client = Client(address, timeout="20s")
+                client = Client(address, timeout=DASK_CONNECT_TIMEOUT)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise InputError(None, f"cannot reach the Dask scheduler at {address!r} ({exc})") from None
         with client:
