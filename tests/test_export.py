@@ -224,3 +224,24 @@ def test_export_cli_raw_and_smoothed(track, tmp_path, capsys):
         err = capsys.readouterr().err
         assert "Traceback" not in err and argv[1] in err.strip().splitlines()[-1]
         assert not (tmp_path / "bad").exists()
+
+
+def test_track_writes_exports_beside_the_track(tmp_path):
+    """``depthtrack track --export``: the track as always, plus OUT/exports/ from the same poses."""
+    import pygltflib
+
+    from depthtrack.io.track_output import read_track
+    from depthtrack.synth.generate import synthesize_procedural
+
+    seq = tmp_path / "seq"
+    synthesize_procedural("wave", seq, seconds=0.12, height=1.7)          # 3 frames
+    out = tmp_path / "trk"
+    assert main(["track", str(seq), "-o", str(out), "--method", "ep", "--export", "glb,json",
+                 "--quiet"]) == 0
+    assert sorted(p.name for p in (out / "exports").iterdir()) == ["joints.json", "track.glb"]
+    track = read_track(out)
+    doc = json.loads((out / "exports" / "joints.json").read_text())
+    got = np.array([[doc["frames"][f]["joints"][n] for n in JOINT_NAMES] for f in range(3)], float)
+    assert np.allclose(got, track.joints, atol=2e-6)                        # both keep 1 um
+    gl = pygltflib.GLTF2().load_binary(str(out / "exports" / "track.glb"))
+    assert gl.accessors[gl.animations[0].samplers[0].input].count == 3
