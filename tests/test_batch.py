@@ -68,3 +68,12 @@ def test_unreachable_scheduler_is_one_line_exit_2(seqs, capsys, monkeypatch):
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "Dask scheduler" in err[0]
+
+
+def test_library_call_raises_on_a_broken_sequence_by_default(seqs):
+    from depthtrack.errors import InputError
+
+    with pytest.raises(InputError, match="sequence.json"):
+        evaluate([seqs["broken"]], methods=METHODS)
+    kept = evaluate([seqs["broken"]], methods=METHODS, keep_going=True)
+    assert kept.results == [] and [f.name for f in kept.failures] == ["broken"]

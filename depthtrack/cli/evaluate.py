@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from ..errors import InputError
 
@@ -75,11 +76,14 @@ def run(args) -> int:
     methods = METHODS if args.methods is None else args.methods.split(",")
     if args.workers is not None and args.workers < 1:
         raise InputError(None, f"--workers must be at least 1, not {args.workers}")
+    if args.tracks_out is not None and Path(args.tracks_out).exists() and not Path(args.tracks_out).is_dir():
+        raise InputError(args.tracks_out, "exists and is not a directory")
     executor = "dask" if args.dask else ("workers" if args.workers else "serial")
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
                           track_dirs=args.track, quiet=args.quiet,
                           log=None if args.quiet else print_line, executor=executor,
-                          workers=args.workers, dask_address=args.dask, tracks_out=args.tracks_out)
+                          workers=args.workers, dask_address=args.dask, tracks_out=args.tracks_out,
+                          keep_going=True)
     for failure in evaluation.failures:
         print(f"depthtrack eval: {failure.message}" if failure.bad_input
               else f"depthtrack eval: {failure.path}: {failure.message}", file=sys.stderr)

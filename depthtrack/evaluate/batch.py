@@ -86,32 +86,40 @@ class SequenceFailure:
     detail: str = ""
 
 
-def run_sequence(task: SequenceTask):
-    """Evaluate one sequence with every method; the task function of every executor.
+def evaluate_sequence(task: SequenceTask) -> list:
+    """Track one sequence with every method and score it: ``list of MethodResult``.
 
-    Returns
-    -------
-    (index, list of MethodResult) or (index, SequenceFailure)
+    Raises what goes wrong (:func:`run_sequence` turns that into a failure record).
     """
     from threadpoolctl import threadpool_limits
 
     from . import runs
 
+    with threadpool_limits(limits=1):
+        seq = runs.open_with_ground_truth(task.path)
+        results = []
+        for method in task.methods:
+            joints, poses, body, seconds, summary = runs.track_sequence(seq, method, task.likelihood,
+                                                                         not task.progress)
+            result = runs.score(task.name, method, seq, joints, poses, body, seconds)
+            result.track_summary = dict(summary)
+            if task.tracks_dir is not None:
+                from ..io.track_output import write_track
+                write_track(Path(task.tracks_dir) / task.name / method, joints, poses, body.pose_names,
+                            body, seq.fps, dict(summary, sequence=str(seq.path)))
+            results.append(result)
+    return results
+
+
+def run_sequence(task: SequenceTask):
+    """The task function of every executor: :func:`evaluate_sequence`, failures returned, not raised.
+
+    Returns
+    -------
+    (index, list of MethodResult) or (index, SequenceFailure)
+    """
     try:
-        with threadpool_limits(limits=1):
-            seq = runs.open_with_ground_truth(task.path)
-            results = []
-            for method in task.methods:
-                joints, poses, body, seconds, summary = runs.track_sequence(seq, method, task.likelihood,
-                                                                             not task.progress)
-                result = runs.score(task.name, method, seq, joints, poses, body, seconds)
-                result.track_summary = dict(summary)
-                if task.tracks_dir is not None:
-                    from ..io.track_output import write_track
-                    write_track(Path(task.tracks_dir) / task.name / method, joints, poses, body.pose_names,
-                                body, seq.fps, dict(summary, sequence=str(seq.path)))
-                results.append(result)
-        return task.index, results
+        return task.index, evaluate_sequence(task)
     except InputError as exc:
         return task.index, SequenceFailure(task.name, task.path, str(exc), True)
     except Exception as exc:  # a task never takes the batch down; the caller reports it
@@ -125,9 +133,10 @@ def _limit_blas_threads():
     threadpool_limits(limits=1)
 
 
-def _serial(tasks):
+def _serial(tasks, keep_going):
     for task in tasks:
-        yield run_sequence(task)
+        # stopping at the first failure: let it raise here with its own traceback
+        yield run_sequence(task) if keep_going else (task.index, evaluate_sequence(task))
 
 
 def _process_pool(tasks, workers):
@@ -177,7 +186,7 @@ def _dask(tasks, address, workers):
 
 
 def run_tasks(tasks, executor: str = "serial", workers: int | None = None, address: str | None = None,
-              log=None):
+              log=None, keep_going: bool = True):
     """Run sequence tasks and gather their outcomes in task order.
 
     Parameters
@@ -190,6 +199,9 @@ def run_tasks(tasks, executor: str = "serial", workers: int | None = None, addre
         ``"local"`` or a scheduler address, for ``"dask"``.
     log : callable(str) or None
         One line per finished sequence, as it finishes: ``[k/n] NAME: ...``.
+    keep_going : bool
+        True: failures are returned and the other sequences run on. False: the first
+        failure raises (an :class:`InputError` for bad input).
 
     Returns
     -------
@@ -200,7 +212,7 @@ def run_tasks(tasks, executor: str = "serial", workers: int | None = None, addre
     """
     log = log or (lambda line: None)
     if executor == "serial":
-        outcomes = _serial(tasks)
+        outcomes = _serial(tasks, keep_going)
     elif executor == "workers":
         if not workers or workers < 1:
             raise InputError(None, f"--workers must be at least 1, not {workers}")
@@ -217,6 +229,10 @@ def run_tasks(tasks, executor: str = "serial", workers: int | None = None, addre
         by_index[index] = outcome
         name = tasks[[t.index for t in tasks].index(index)].name
         if isinstance(outcome, SequenceFailure):
+            if not keep_going:
+                if outcome.bad_input:
+                    raise InputError(None, outcome.message)
+                raise RuntimeError(f"{outcome.path}: {outcome.message}\n{outcome.detail}")
             log(f"[{done}/{len(tasks)}] {name}: FAILED: {outcome.message}")
         else:
             from .runs import _line
@@ -232,4 +248,4 @@ def run_tasks(tasks, executor: str = "serial", workers: int | None = None, addre
     return results, failures
 
 
-__all__ = ["EXECUTORS", "SequenceTask", "SequenceFailure", "run_sequence", "run_tasks"]
+__all__ = ["EXECUTORS", "SequenceTask", "SequenceFailure", "evaluate_sequence", "run_sequence", "run_tasks"]

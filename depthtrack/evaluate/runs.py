@@ -265,7 +265,7 @@ def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool =
 
 def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", track_dirs=None,
              quiet: bool = True, log=None, executor: str = "serial", workers: int | None = None,
-             dask_address: str | None = None, tracks_out=None) -> Evaluation:
+             dask_address: str | None = None, tracks_out=None, keep_going: bool = False) -> Evaluation:
     """Track and score sequences (or score existing tracks).
 
     Parameters
@@ -288,6 +288,9 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
         (a spawned process pool) or ``"dask"``. Scoring ``track_dirs`` always runs here.
     tracks_out : path-like or None
         Also write every track to ``tracks_out/NAME/METHOD/`` (atomically, per track).
+    keep_going : bool
+        False (default): the first sequence that fails raises. True (``depthtrack eval``):
+        it is recorded in ``Evaluation.failures`` and the others run on.
 
     Raises
     ------
@@ -295,7 +298,7 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
         Before any work is done: an unknown method or likelihood, two sequences with one
         name; with ``track_dirs`` also a missing sequence, one without ground truth, a
         track that does not match its sequence. When tracking, a sequence that cannot be
-        read does not stop the others: it is in ``Evaluation.failures``.
+        read raises when it is reached (with ``keep_going``: see above).
     """
     if likelihood not in LIKELIHOODS:
         raise InputError(None, f"unknown likelihood {likelihood!r}; choose from {', '.join(LIKELIHOODS)}")
@@ -354,7 +357,8 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
                           None if tracks_out is None else str(Path(tracks_out)),
                           progress=executor == "serial" and not quiet)
              for i, p in enumerate(unique)]
-    results, failures = run_tasks(tasks, executor, workers=workers, address=dask_address, log=log)
+    results, failures = run_tasks(tasks, executor, workers=workers, address=dask_address, log=log,
+                                  keep_going=keep_going)
     return Evaluation(results, likelihood=likelihood, failures=failures)
 
 
