@@ -20,6 +20,10 @@ camera, so a glTF camera at the origin with no rotation looks where the depth ca
 looked. The floor is wherever the camera saw it (not moved to y = 0; a tilted camera
 gives a tilted floor).
 
+The body's per-bone stretch, when it has one (``BodyModel.segment_scale``; the tracker
+scales uniformly), is baked into the rest surface; glTF skinning then moves the few
+centimetres around a stretched bone's parent joint slightly differently from ours.
+
 Frames without a pose (NaN rows) hold the last known pose (leading ones the first), as
 in ``track.bvh``: a keyframed animation has no "unknown".
 """

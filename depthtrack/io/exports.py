@@ -1,16 +1,11 @@
 """Exports of a track for other tools: one registry, one module per format.
 
-==========  ==================  ================================================  =========
-format      file                what                                              axes
-==========  ==================  ================================================  =========
-``glb``     ``track.glb``       skinned body + animation (:mod:`.export_gltf`)    y up, m
-``gltf``    ``track.gltf``      the same as JSON glTF, buffer embedded            y up, m
-``c3d``     ``track.c3d``       39 Plug-in Gait markers + 15 joints               z up, mm
-                                (:mod:`.export_c3d`)
-``json``    ``joints.json``     per-frame joints (:mod:`.export_json`)            camera, m
-``bvh``     ``track.bvh``       T-pose rest skeleton (:mod:`.export_bvh`)         ``up``, m
-``csv``     ``joints.csv``      ``frame,joint,x,y,z`` as the track's joints.csv   camera, m
-==========  ==================  ================================================  =========
+* ``glb``  -> ``track.glb``: skinned body and animation (:mod:`.export_gltf`); y up, metres
+* ``gltf`` -> ``track.gltf``: the same as JSON glTF, buffer embedded
+* ``c3d``  -> ``track.c3d``: 39 Plug-in Gait markers and 15 joints (:mod:`.export_c3d`); z up, mm
+* ``json`` -> ``joints.json``: per-frame joints (:mod:`.export_json`); camera frame, metres
+* ``bvh``  -> ``track.bvh``: T-pose rest skeleton (:mod:`.export_bvh`); ``up`` y or z, metres
+* ``csv``  -> ``joints.csv``: ``frame,joint,x,y,z`` as the track's own; camera frame, metres
 
 A ``suffix`` (``"_smoothed"`` for smoothed exports) goes before the extension, so smoothed
 files sit beside raw ones. Frames without a pose are NaN/absent/``null`` where the format
