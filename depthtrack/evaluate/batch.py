@@ -9,7 +9,9 @@ One task per sequence, the same function (:func:`run_sequence`) in all three exe
 * ``dask``    -- ``--dask ADDRESS`` (a running scheduler, ``tcp://host:8786``) or
   ``--dask local`` (a ``distributed.LocalCluster`` of worker processes, one thread each,
   ``--workers`` of them, default 2). Workers must import the same depthtrack and see the
-  sequence paths (a shared file system).
+  sequence paths (a shared file system); start them with one thread each (``dask worker
+  ADDRESS --nthreads 1 --nworkers N``): a process runs one sequence at a time anyway,
+  since its OpenGL context serves one thread.
 
 A task opens its sequence, tracks it with every method, scores it and, when asked, writes
 each track to ``TRACKS/NAME/METHOD/`` atomically. It never raises: a failure (bad input,
@@ -23,6 +25,7 @@ the figures agree exactly (only ``fps``, a timing, differs).
 from __future__ import annotations
 
 import multiprocessing
+import threading
 import time
 import traceback
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -32,6 +35,8 @@ from pathlib import Path
 from ..errors import InputError
 
 EXECUTORS = ("serial", "workers", "dask")
+
+_PROCESS_LOCK = threading.Lock()
 
 #: How long to try reaching a Dask scheduler before giving up.
 DASK_CONNECT_TIMEOUT = "20s"
@@ -95,7 +100,9 @@ def evaluate_sequence(task: SequenceTask) -> list:
 
     from . import runs
 
-    with threadpool_limits(limits=1):
+    # one task at a time per process: the process's one GL context is not shared between
+    # threads (a Dask worker started with --nthreads 2 would otherwise run two at once)
+    with _PROCESS_LOCK, threadpool_limits(limits=1):
         seq = runs.open_with_ground_truth(task.path)
         results = []
         for method in task.methods:
