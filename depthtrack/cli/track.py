@@ -77,6 +77,9 @@ def run(args) -> int:
         from ..motion.smoothing import parse_smoothing
         parse_formats(args.formats)
         parse_smoothing(args.smooth)
+    elif (args.smooth != "none" or args.up != "y") and not args.quiet:
+        print("note: --smooth and --up apply to --export files, and no --export was given",
+              file=sys.stderr)
     seq = open_sequence(args.sequence)
     t0 = time.perf_counter()
     with Progress(len(seq), "frames", quiet=args.quiet) as progress:
