@@ -53,7 +53,8 @@ def register(subparsers) -> None:
     p.add_argument("--report", metavar="DIR", default=None,
                    help="write metrics.json, report.md, errors.csv and plots into DIR (replaced)")
     p.add_argument("--json", action="store_true",
-                   help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout')
+                   help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout '
+                        '(plus "failed": {NAME: WHY} when a sequence failed)')
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="track N sequences at once in spawned processes (with --dask local: its "
                         "worker processes, default 2)")
