@@ -14,7 +14,7 @@ from ..render.context import GLUnavailableError
 from .args import Parser, print_error
 
 #: Modules under ``depthtrack.cli`` that contribute commands, in ``--help`` order.
-COMMAND_MODULES = ("demo", "synth", "convert", "track", "evaluate", "swim", "bench")
+COMMAND_MODULES = ("demo", "synth", "convert", "track", "export", "evaluate", "swim", "bench")
 
 
 def build_parser() -> Parser:

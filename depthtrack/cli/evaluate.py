@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from ..errors import InputError
 from .reader_options import add_reader_options, reader_options
@@ -15,9 +16,19 @@ _EPILOG = """examples:
   depthtrack eval seqs/walk --likelihood pixel --json > walk.json
   depthtrack eval seqs/walk seqs/walk --track out/walk_hc out/walk_hcep --json
   depthtrack eval my_recording --track out/my_recording     # no ground truth: fit figures only
+  depthtrack eval seqs/* --workers 2 --json > all.json          # 2 processes on this machine
+  depthtrack eval seqs/* --dask local --workers 4                # a Dask LocalCluster
+  depthtrack eval /lab/seqs/* --dask tcp://scheduler:8786 --tracks-out /lab/tracks
 
 Overall figures average the sequences, each weighing the same (frames: the total).
-Results go to stdout (a table, or JSON with --json); progress to stderr."""
+Results go to stdout (a table, or JSON with --json); progress to stderr.
+
+Batches: one task per sequence (all its methods), run in order here (default), in
+--workers N spawned processes, or on a Dask cluster (--dask ADDRESS, or --dask local for
+a LocalCluster of --workers processes, default 2); the figures are the same every way
+(fps aside). A sequence that fails is reported (stderr, and "failed" in --json) and the
+others go on. Exit status: 0 all done; 2 bad input (nothing run, or a sequence that could
+not be read: the rest still reported); 1 a sequence crashed (a bug or a lost worker)."""
 
 
 def register(subparsers) -> None:
@@ -51,7 +62,16 @@ def register(subparsers) -> None:
     p.add_argument("--report", metavar="DIR", default=None,
                    help="write metrics.json, report.md, errors.csv and plots into DIR (replaced)")
     p.add_argument("--json", action="store_true",
-                   help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout')
+                   help='print only {"sequences": {NAME: {METHOD: M}}, "overall": {METHOD: M}} to stdout '
+                        '(plus "failed": {NAME: WHY} when a sequence failed)')
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="track N sequences at once in spawned processes (with --dask local: its "
+                        "worker processes, default 2)")
+    p.add_argument("--dask", metavar="ADDRESS", default=None,
+                   help="run one task per sequence on a Dask cluster: a scheduler address "
+                        "(tcp://HOST:8786) or 'local' for a LocalCluster on this machine")
+    p.add_argument("--tracks-out", metavar="DIR", default=None,
+                   help="also write each track to DIR/SEQUENCE/METHOD/ (as `depthtrack track` does)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_reader_options(p)
     add_force(p, "the --report directory")
@@ -67,9 +87,23 @@ def run(args) -> int:
                                "its summary.json)")
     check_output(args, "report", inputs=[*args.sequences, *(args.track or ())])
     methods = METHODS if args.methods is None else args.methods.split(",")
+    if args.workers is not None and args.workers < 1:
+        raise InputError(None, f"--workers must be at least 1, not {args.workers}")
+    if args.tracks_out is not None and Path(args.tracks_out).exists() and not Path(args.tracks_out).is_dir():
+        raise InputError(args.tracks_out, "exists and is not a directory")
+    executor = "dask" if args.dask else ("workers" if args.workers else "serial")
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
                           track_dirs=args.track, quiet=args.quiet, open_options=reader_options(args),
-                          log=None if args.quiet else print_line)
+                          log=None if args.quiet else print_line, executor=executor,
+                          workers=args.workers, dask_address=args.dask, tracks_out=args.tracks_out,
+                          keep_going=True)
+    for failure in evaluation.failures:
+        print(f"depthtrack eval: {failure.message}" if failure.bad_input
+              else f"depthtrack eval: {failure.path}: {failure.message}", file=sys.stderr)
+        if failure.detail and not args.quiet:
+            print(failure.detail.rstrip(), file=sys.stderr)
+    if not evaluation.results:
+        return 2 if all(f.bad_input for f in evaluation.failures) else 1
     data = evaluation.to_dict()
     written = write_report(evaluation, args.report) if args.report else None
     if args.json:
@@ -79,4 +113,6 @@ def run(args) -> int:
     if written and not args.quiet:
         print(f"report: {args.report}/report.md (metrics.json, errors.csv, "
               f"{', '.join(n for n in written if n.endswith('.png'))})", file=sys.stderr)
+    if evaluation.failures:
+        return 2 if all(f.bad_input for f in evaluation.failures) else 1
     return 0

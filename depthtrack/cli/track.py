@@ -24,6 +24,7 @@ examples:
 
 SEQ is any readable recording: a sequence directory or .npz, an Azure Kinect / Femto .mkv,
 a ROS 1 .bag, a ROS 2 bag directory, a TUM RGB-D folder (see "reading recordings").
+  depthtrack track seq_walk -o track_walk --export glb,c3d,json --smooth savgol:9
 
 OUT gets joints.csv, poses.npz, track.bvh and summary.json (method, settings, body height
 and where it came from, timings per stage, frames per second). The body height is read
@@ -31,7 +32,8 @@ from sequence.json (subject.height_m), or else fitted to the first frame with a 
 the likelihood (a few seconds). After the automatic start, the pose and its twin facing
 the other way are both tracked for ten frames and the better kept (a depth image barely
 tells front from back). Frames without a person (an empty room, the subject gone) get no
-pose; tracking starts again when someone appears."""
+pose; tracking starts again when someone appears. --export also writes OUT/exports/
+(track.glb, track.c3d, joints.json, ...; see `depthtrack export --help`)."""
 
 OVERLAY_SUFFIXES = (".mp4", ".gif")
 
@@ -54,6 +56,9 @@ def register(subparsers) -> None:
     p.add_argument("--init-from-groundtruth", action="store_true",
                    help="ABLATION ONLY: start from a pose fitted to the ground-truth joints of "
                         "frame 0 instead of the automatic initialisation (recorded in summary.json)")
+    from .export import add_export_options
+    add_export_options(p, "--export", "also write these formats into OUT/exports/: glb, gltf, c3d, json, "
+                                      "bvh, csv (comma-separated; see `depthtrack export`)")
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
     add_reader_options(p)
     add_force(p, "OUT")
@@ -91,6 +96,14 @@ def run(args) -> int:
     overlay = Path(args.overlay) if args.overlay else None
     if overlay is not None and overlay.suffix.lower() not in OVERLAY_SUFFIXES:
         raise InputError(overlay, "overlay must end in .mp4 or .gif")
+    if getattr(args, "formats", None):                 # check export options before tracking
+        from ..io.exports import parse_formats
+        from ..motion.smoothing import parse_smoothing
+        parse_formats(args.formats)
+        parse_smoothing(args.smooth)
+    elif (args.smooth != "none" or args.up != "y") and not args.quiet:
+        print("note: --smooth and --up apply to --export files, and no --export was given",
+              file=sys.stderr)
     check_output(args, "overlay", inputs=[args.sequence, args.out], kind="file")
     seq = open_sequence(args.sequence, **reader_options(args))
     t0 = time.perf_counter()
@@ -104,6 +117,13 @@ def run(args) -> int:
     write_track(out, result.joints, result.poses, body.pose_names, body, seq.fps, summary)
     if overlay is not None:
         _add_overlay(out, overlay, seq, result.poses, body, summary)
+    if getattr(args, "formats", None):
+        from .export import export_track_outputs
+
+        exported = export_track_outputs(out / "exports", body, result.poses, result.joints, seq.fps,
+                                        args.formats, args.smooth, args.up)
+        if not args.quiet:
+            print("exports: " + ", ".join(str(p) for p in exported.values()), file=sys.stderr)
     if not args.quiet:
         t = summary["timings"]
         print(f"tracked {len(seq)} frames with {args.method} ({args.likelihood} likelihood) in "

@@ -82,10 +82,13 @@ class Evaluation:
         In sequence order, then method order.
     likelihood : str or None
         The likelihood the tracks were made with (``None`` when read from ``--track``).
+    failures : list of depthtrack.evaluate.batch.SequenceFailure
+        Sequences that could not be evaluated (the others are in ``results``).
     """
 
     results: list
     likelihood: str | None = None
+    failures: list = field(default_factory=list)
 
     @property
     def sequences(self) -> list:
@@ -113,7 +116,10 @@ class Evaluation:
         sequences = {}
         for r in self.results:
             sequences.setdefault(r.sequence, {})[r.method] = dict(r.summary)
-        return {"sequences": sequences, "overall": self.overall()}
+        out = {"sequences": sequences, "overall": self.overall()}
+        if self.failures:
+            out["failed"] = {f.name: f.message for f in self.failures}
+        return out
 
 
 # ------------------------------------------------------------------ inputs
@@ -287,7 +293,9 @@ def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool =
 
 
 def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", track_dirs=None,
-             quiet: bool = True, log=None, open_options=None) -> Evaluation:
+             quiet: bool = True, log=None, open_options=None, executor: str = "serial",
+             workers: int | None = None, dask_address: str | None = None, tracks_out=None,
+             keep_going: bool = False) -> Evaluation:
     """Track and score sequences (or score existing tracks).
 
     Parameters
@@ -308,23 +316,28 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
         Receives one line per finished (sequence, method).
     open_options : dict or None
         Reader options for :func:`depthtrack.io.registry.open_sequence` (``topic``, ...).
+    executor, workers, dask_address : see :func:`depthtrack.evaluate.batch.run_tasks`
+        How the sequences are tracked (one task per sequence): ``"serial"``, ``"workers"``
+        (a spawned process pool) or ``"dask"``. Scoring ``track_dirs`` always runs here.
+    tracks_out : path-like or None
+        Also write every track to ``tracks_out/NAME/METHOD/`` (atomically, per track).
+    keep_going : bool
+        False (default): the first sequence that fails raises. True (``depthtrack eval``):
+        it is recorded in ``Evaluation.failures`` and the others run on.
 
     Raises
     ------
     InputError
-        Before any work is done: a missing sequence, an unknown method, a track that does
-        not match its sequence.
+        Before any work is done: an unknown method or likelihood, two sequences with one
+        name; with ``track_dirs`` also a missing sequence, one without ground truth, a
+        track that does not match its sequence. When tracking, a sequence that cannot be
+        read raises when it is reached (with ``keep_going``: see above).
     """
     if likelihood not in LIKELIHOODS:
         raise InputError(None, f"unknown likelihood {likelihood!r}; choose from {', '.join(LIKELIHOODS)}")
     sequence_paths = [Path(p) for p in sequence_paths]
     if not sequence_paths:
         raise InputError(None, "no sequence given")
-    sequences = {}
-    for p in sequence_paths:
-        key = str(p.resolve())
-        if key not in sequences:
-            sequences[key] = open_with_ground_truth(p, require=False, **(open_options or {}))
     names = {}
     for p in sequence_paths:
         name = sequence_name(p)
@@ -346,6 +359,12 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
     results = []
     if track_dirs is not None:
         from ..io.track_output import read_track
+
+        sequences = {}
+        for p in sequence_paths:
+            key = str(p.resolve())
+            if key not in sequences:
+                sequences[key] = open_with_ground_truth(p, require=False, **(open_options or {}))
 
         track_dirs = [Path(t) for t in track_dirs]
         if len(track_dirs) != len(sequence_paths):
@@ -375,16 +394,17 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
         return Evaluation(results, likelihood=None)
 
     methods = check_methods(methods)
-    for p in dict.fromkeys(sequence_paths):
-        seq = sequences[str(p.resolve())]
-        for method in methods:
-            joints, poses, body, seconds, summary = track_sequence(seq, method, likelihood, quiet)
-            result = score(sequence_name(p), method, seq, joints, poses, body, seconds,
-                           masks=masks_of(seq))
-            result.track_summary = dict(summary)
-            log(_line(result))
-            results.append(result)
-    return Evaluation(results, likelihood=likelihood)
+    from .batch import SequenceTask, run_tasks
+
+    unique = list(dict.fromkeys(str(p.resolve()) for p in sequence_paths))
+    tasks = [SequenceTask(i, p, sequence_name(p), tuple(methods), likelihood,
+                          None if tracks_out is None else str(Path(tracks_out)),
+                          progress=executor == "serial" and not quiet,
+                          open_options=dict(open_options or {}))
+             for i, p in enumerate(unique)]
+    results, failures = run_tasks(tasks, executor, workers=workers, address=dask_address, log=log,
+                                  keep_going=keep_going)
+    return Evaluation(results, likelihood=likelihood, failures=failures)
 
 
 def _fmt(value, scale=1.0, unit="", digits=1):

@@ -100,16 +100,9 @@ def write_track(out_dir, joints, poses, pose_names, body, fps: float, summary: d
                      joint_names=np.array(list(body.joint_names)),
                      body_height=np.float64(body.height), body_offsets=np.asarray(body.offsets, float),
                      fps=np.float64(fps))
-        finite = np.all(np.isfinite(poses), axis=1)
         # A BVH has no "unknown": frames without a pose repeat the last known one.
-        if finite.any():
-            filled = poses.copy()
-            last = poses[np.argmax(finite)]
-            for i in range(F):
-                if finite[i]:
-                    last = poses[i]
-                else:
-                    filled[i] = last
+        filled = hold_last_pose(poses)
+        if filled is not None:
             write_bvh(tmp / "track.bvh", body, filled, fps)
         (tmp / "summary.json").write_text(summary_json_text(summary))
     return out_dir
@@ -118,6 +111,30 @@ def write_track(out_dir, joints, poses, pose_names, body, fps: float, summary: d
 def summary_json_text(summary: dict) -> str:
     """The text of ``summary.json`` for ``summary`` (numpy values and paths converted)."""
     return json.dumps(summary, indent=1, default=_json_default) + "\n"
+
+
+def hold_last_pose(poses):
+    """Poses with every unknown (non-finite) row replaced by the last known one.
+
+    Leading unknown rows take the first known pose. Used wherever a format has no
+    "unknown" (BVH, glTF animations).
+
+    Parameters
+    ----------
+    poses : (F, D) float
+
+    Returns
+    -------
+    (F, D) float64, or None when no row is known.
+    """
+    poses = np.asarray(poses, dtype=float)
+    finite = np.all(np.isfinite(poses), axis=1)
+    if not finite.any():
+        return None
+    known = np.where(finite, np.arange(len(poses)), -1)
+    last = np.maximum.accumulate(known)
+    last[last < 0] = int(np.argmax(finite))
+    return poses[last].copy()
 
 
 def _json_default(value):
