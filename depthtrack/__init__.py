@@ -25,7 +25,7 @@ from .io import (BvhMotion, Sequence, Track, import_c3d_markers, open_sequence, 
 from .motion.retarget import resample_poses, retarget
 from .synth import MARKER_NAMES, ToFNoise, procedural_motion, synthesize_bvh, synthesize_procedural
 from .detect import detect_parts, geodesic_extrema, segment_foreground
-from .track import Tracker, TrackerSettings, run_tracking
+from .track import Tracker, TrackerSettings, run_tracking, track_stream
 
 from .filters import KalmanFilter, ParticleFilter, UnscentedKalmanFilter
 
@@ -36,5 +36,5 @@ __all__ = ["JOINT_NAMES", "JOINT_INDEX", "InputError", "Camera", "BodyModel", "L
            "open_sequence", "write_sequence", "read_bvh", "write_bvh", "read_track", "write_track",
            "import_c3d_markers", "retarget", "resample_poses", "MARKER_NAMES", "ToFNoise",
            "procedural_motion", "synthesize_bvh", "synthesize_procedural", "segment_foreground",
-           "geodesic_extrema", "detect_parts", "Tracker", "TrackerSettings", "run_tracking",
+           "geodesic_extrema", "detect_parts", "Tracker", "TrackerSettings", "run_tracking", "track_stream",
            "KalmanFilter", "ParticleFilter", "UnscentedKalmanFilter", "__version__"]

@@ -60,7 +60,7 @@ def _check_out(out: Path) -> None:
 def run(args) -> int:
     from ..io.sequence import open_sequence
     from ..progress import Progress
-    from ..track.tracker import run_tracking
+    from ..track import run_tracking
 
     out = Path(args.out)
     _check_out(out)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import InputError
 # the paper's three trackers (hc, ep, hc+ep) and two likelihoods, as the tracker defines them
-from ..track.tracker import LIKELIHOODS, METHODS
+from ..track import LIKELIHOODS, METHODS
 from . import metrics
 from .markers import known_marker_names, marker_positions
 
@@ -246,7 +246,7 @@ def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool =
         The tracker's summary (method, settings, timings...), as ``depthtrack track`` writes it.
     """
     from ..progress import Progress
-    from ..track.tracker import run_tracking
+    from ..track import run_tracking
 
     start = time.perf_counter()
     with Progress(len(seq), f"{method} frames", quiet=quiet) as progress:
