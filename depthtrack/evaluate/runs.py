@@ -232,7 +232,7 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None) -> Met
 
 
 def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool = True):
-    """Track a sequence as ``depthtrack track`` does (:func:`depthtrack.track.tracker.run_tracking`:
+    """Track a sequence as ``depthtrack track`` does (:func:`depthtrack.track.run.run_tracking`:
     automatic initialisation, body height from sequence.json or estimated; no ground truth).
 
     Returns

@@ -23,7 +23,8 @@ from .settings import (AssociateSettings, EnergySettings, HeadingSettings, Heigh
                        JudgeSettings, ObserveSettings, PolishSettings, SearchSettings,
                        StartSettings, TrackerSettings)
 from .state import TrackedFrame, TrackingState, TrackResult
-from .tracker import LIKELIHOODS, METHODS, Tracker, track_stream  # before .run (it re-exports it)
+from .tracker import LIKELIHOODS, METHODS, Tracker  # before .loop and .run (it re-exports them)
+from .loop import track_stream  # noqa: E402
 from .run import fit_pose_to_joints, run_tracking  # noqa: E402
 
 __all__ = ["Tracker", "TrackerSettings", "TrackResult", "TrackingState", "TrackedFrame", "METHODS",

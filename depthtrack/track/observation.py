@@ -52,7 +52,7 @@ def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
     the segmented person ``mask (H, W) bool`` and belongs to a 4-connected no-reading
     region of at least ``min_area`` of the image (dropouts are specks, open space is not).
     """
-    zero = ~(np.asarray(depth) > 0)
+    zero = ~(np.asarray(depth) > NO_READING)       # NaN too
     k = 2 * int(clearance) + 1
     away = cv2.dilate(np.asarray(mask, np.uint8), np.ones((k, k), np.uint8)) == 0
     candidates = (zero & away).astype(np.uint8)

@@ -28,14 +28,12 @@ Methods (``method=``), following the ToF paper's experiments:
     energy is compared.
 
 All three share the automatic start (:mod:`.start`), which needs the model-based search to
-find the body at all. :func:`track_stream` tracks depth frames from any iterable and yields
-each frame's pose as soon as it is known; :meth:`Tracker.track_sequence` and
-:func:`~.run.run_tracking` run the same loop over a sequence.
+find the body at all. The frame loop is :mod:`.loop`: :func:`~.loop.track_stream` tracks depth
+frames from any iterable and yields each frame's pose as soon as it is known;
+:meth:`Tracker.track_sequence` and :func:`~.run.run_tracking` run the same loop over a sequence.
 """
 from __future__ import annotations
 
-import collections
-import itertools
 import time
 
 import numpy as np
@@ -44,7 +42,7 @@ from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
-from .heading import settle_heading, turned_pose
+from .heading import turned_pose
 from .judge import is_lost, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage
@@ -53,7 +51,7 @@ from .renderers import RendererSet
 from .search import Climbers, climb, polish, predict, search
 from .settings import TrackerSettings
 from .start import global_search
-from .state import TrackedFrame, TrackingState, TrackResult
+from .state import TrackingState, TrackResult
 
 METHODS = ("hc", "ep", "hc+ep")
 LIKELIHOODS = ("smoothed", "pixel")
@@ -243,7 +241,7 @@ class Tracker:
                               "recovered": recovered}, pose=x, velocity=velocity, absent=absent)
         return state, x.copy()
 
-    def _track_through(self, state, depths):
+    def track_through(self, state, depths):
         """``advance`` through ``depths``; ``(state, poses (K, 48), mean cost)``, or None when
         the track is dropped on the way."""
         out = []
@@ -255,7 +253,7 @@ class Tracker:
         costs = [f["cost"] for f in state.log[-len(depths):]]
         return state, np.array(out), float(np.mean(costs))
 
-    def _turn(self, frame):
+    def turned_start(self, frame):
         """The turned twin of a pose, climbed on the start ``frame`` (re-uploaded)."""
         def turn(pose):
             self.renderers.upload(frame)
@@ -293,81 +291,11 @@ class Tracker:
 
     # ------------------------------------------------------------------ the frame loop
     def stream(self, frames, init_pose=None):
-        """Track depth frames from any iterable; yields ``(index, pose (48,) or None)`` in order.
+        """Track depth frames from any iterable; yields ``(index, pose (48,) or None)`` in order
+        (:func:`.loop.stream_poses`)."""
+        from .loop import stream_poses
 
-        A pose is yielded as soon as it is final: at once, except after an automatic start
-        (the front/back check tracks the next :attr:`HeadingSettings.frames` frames first)
-        and while the segmentation misses the person (the track may yet be dropped, and
-        then those frames get no pose). Frames without a person get None; tracking
-        (re)starts with the automatic start on the next frame with a person.
-
-        Parameters
-        ----------
-        frames : iterable of (H, W) float
-        init_pose : (48,) float, optional
-            Start from this pose on frame 0 (ablation: ground-truth initialisation).
-        """
-        s = self.settings
-        K = s.heading.frames
-        source = iter(frames)
-        pending = collections.deque()   # frames read ahead and given back
-        held = []              # (index, pose) not yet yielded: the track may still drop them
-
-        def take(n):
-            out = [pending.popleft() for _ in range(min(n, len(pending)))]
-            return out + list(itertools.islice(source, n - len(out)))
-
-        i = -1
-        while True:
-            got = take(1)
-            if not got:
-                break
-            depth, i = got[0], i + 1
-            if i == 0 and init_pose is not None:
-                self.state, _, x = self.start(self.state, depth, pose=init_pose)
-                held.append((i, x))
-            elif self.state.pose is not None:
-                self._advance_into(held, i, depth)
-            else:
-                with self.recorder.timed("segment"):
-                    fg = self.segmenter(depth, self.camera)
-                if not self.person_present(fg):
-                    self.state = self.state.replace(
-                        frames_without_person=self.state.frames_without_person + 1)
-                    held.append((i, None))
-                else:
-                    self.state, frame, x = self.start(self.state, depth, foreground=fg)
-                    ahead = take(K) if K > 0 else []
-                    settled = None
-                    if K > 0 and len(ahead) == K:
-                        settled = settle_heading(self.state, ahead, self._track_through,
-                                                 self._turn(frame), s)
-                    if settled is not None:
-                        self.state, poses = settled
-                        held.extend((i + k, p) for k, p in enumerate(poses))
-                        i += K
-                    else:                       # no check: the frames read ahead come next
-                        held.append((i, x))
-                        pending.extendleft(reversed(ahead))
-            # frames of a streak without a person stay held: a dropped track drops them too
-            keep = len(held) - (self.state.absent if self.state.pose is not None else 0)
-            yield from held[:keep]
-            del held[:keep]
-        yield from held
-
-    def _advance_into(self, held, i, depth) -> None:
-        """``advance`` on frame ``i`` as the loop does it, appending to ``held``: when the
-        track is dropped, the frames of the streak without a person lose their poses too."""
-        self.state, x = self.advance(self.state, depth)
-        if x is not None:
-            held.append((i, x))
-            return
-        streak = self.settings.observe.absent_frames - 1
-        self.state = self.state.replace(
-            frames_without_person=self.state.frames_without_person + streak)
-        first = max(len(held) - streak, 0)
-        held[first:] = [(j, None) for j, _ in held[first:]]
-        held.append((i, None))
+        return stream_poses(self, frames, init_pose)
 
     def track_sequence(self, seq, progress=None, init_pose=None) -> TrackResult:
         """Track every frame of a :class:`~depthtrack.io.sequence.Sequence` (:meth:`stream`).
@@ -406,66 +334,7 @@ class Tracker:
                 "energies": [f.get("energy") for f in self.state.log]}
 
 
-def track_stream(frames, camera, body=None, method: str = "hc+ep", likelihood: str = "smoothed",
-                 fps: float = 25.0, settings: TrackerSettings | None = None, segmenter=None,
-                 detector=None, init_pose=None, height: float | None = None):
-    """Track depth frames one at a time; yield each frame's pose and joints as soon as known.
-
-    The same loop as ``depthtrack track`` (:meth:`Tracker.stream`), over any iterable: a
-    camera driver, a file reader, a list.
-
-    Parameters
-    ----------
-    frames : iterable of (H, W) float
-        Depth in metres, 0 = no reading.
-    camera : Camera
-    body : BodyModel, optional
-        Default: the default body at ``height``, or, without ``height``, at the height fitted
-        to the first frame with a person (:func:`~.height.fit_body_height`).
-    method, likelihood, fps, settings, segmenter, detector, init_pose
-        As :class:`Tracker` and :meth:`Tracker.stream`.
-
-    Yields
-    ------
-    TrackedFrame
-        ``index``, ``pose (48,)`` and ``joints (15, 3)`` (None where there is no person).
-
-    Example
-    -------
-    >>> for f in track_stream(depth_frames, Camera.preset("sr4000"), height=1.75):  # doctest: +SKIP
-    ...     print(f.index, f.joints[0] if f.joints is not None else "nobody")
-    """
-    from ..body import BodyModel
-
-    frames = iter(frames)
-    settings = settings or TrackerSettings()
-    if body is None and height is not None:
-        body = BodyModel.default(height=float(height))
-    if body is None:
-        from .height import fit_body_height
-
-        seg = segmenter
-        if seg is None:
-            from ..detect import segment_foreground as seg
-        before = []
-        for depth in frames:
-            depth = as_depth(depth, camera)
-            before.append(depth)
-            fg = seg(depth, camera)
-            if person_present(fg, camera, settings):
-                body, _ = fit_body_height(depth, fg, camera, fps=fps, settings=settings,
-                                          segmenter=segmenter)
-                break
-        if body is None:
-            body = BodyModel.default()        # nobody in any frame: every frame gets None
-        frames = itertools.chain(before, frames)
-    with Tracker(body, camera, method=method, likelihood=likelihood, fps=fps, settings=settings,
-                 segmenter=segmenter, detector=detector) as tracker:
-        for i, x in tracker.stream(frames, init_pose=init_pose):
-            joints = None if x is None else np.asarray(body.joint_positions(x))
-            yield TrackedFrame(i, x, joints)
-
-
 # the whole-sequence entry points, importable from here as before the split into stages
 from .height import body_for_sequence  # noqa: E402,F401
+from .loop import track_stream  # noqa: E402,F401
 from .run import fit_pose_to_joints, run_tracking  # noqa: E402,F401
