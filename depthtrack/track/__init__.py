@@ -11,8 +11,8 @@ A frame is a pipeline of stages over a :class:`TrackingState` (:mod:`.state`):
 * :mod:`.start` -- the global search of a start; :mod:`.heading` -- the front/back check;
   :mod:`.height` -- the body height;
 * :mod:`.tracker` -- :class:`Tracker` (owns the renderers, :mod:`.renderers`; runs the
-  stages; ``init`` / ``step`` / ``stream`` / ``track_sequence``) and :func:`track_stream`;
-  :mod:`.run` -- :func:`run_tracking`; :mod:`.settings` -- the settings, one group per
+  stages; ``init`` / ``step`` / ``track_sequence``); :mod:`.loop` -- the frame loop and
+  :func:`track_stream`; :mod:`.run` -- :func:`run_tracking`; :mod:`.settings` -- the settings, one group per
   stage; :mod:`.record` -- timings and counts.
 """
 from .association import associate, expand_correspondences, prune_explained
