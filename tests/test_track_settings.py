@@ -46,3 +46,9 @@ def test_every_schedule_number_is_in_the_summary():
     assert start["max_iterations"] == 10 and start["shortlist"] == 6
     assert start["finalists"] == 3 and start["root_blocks"] == 2
     assert StartSettings(axial_shifts=[0, 0.1]).axial_shifts == (0.0, 0.1)
+
+
+def test_the_summary_settings_build_the_same_settings_again():
+    s = TrackerSettings(heading_frames=4, search=SearchSettings(passes=3))
+    again = TrackerSettings(**json.loads(json.dumps(s.to_dict())))
+    assert again == s

@@ -79,6 +79,7 @@ class ObserveSettings:
         _check(int(self.absent_frames) >= 1,
                f"absent_frames must be at least 1, not {self.absent_frames}")
         _check(self.near_dilation >= 1, f"near_dilation must be >= 1, not {self.near_dilation}")
+        object.__setattr__(self, "depth_percentiles", tuple(float(p) for p in self.depth_percentiles))
         lo, hi = self.depth_percentiles
         _check(0 <= lo < hi <= 100, f"depth_percentiles must be 0 <= lo < hi <= 100, not "
                                     f"{self.depth_percentiles}")
@@ -347,6 +348,7 @@ class TrackerSettings:
 
     ``TrackerSettings(search=SearchSettings(passes=3))`` sets a group;
     ``TrackerSettings(heading_frames=0)`` sets a field by its flat name (:data:`FLAT_NAMES`);
+    ``TrackerSettings(**json.load(f)["settings"])`` rebuilds the settings of a summary.json;
     an unknown name or a bad value raises :class:`~depthtrack.errors.InputError`.
     """
 
@@ -364,6 +366,11 @@ class TrackerSettings:
         groups = {}
         for name, cls in GROUPS.items():
             given = kwargs.pop(name, None)
+            if isinstance(given, dict):             # as to_dict() writes it (summary.json)
+                try:
+                    given = cls(**given)
+                except TypeError as exc:
+                    raise InputError(None, f"settings group {name!r}: {exc}") from None
             if given is not None and not isinstance(given, cls):
                 raise InputError(None, f"settings group {name!r} must be a {cls.__name__}")
             groups[name] = given if given is not None else cls()
