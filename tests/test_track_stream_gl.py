@@ -111,5 +111,8 @@ def test_renderers_release_on_leaving_with():
     with TileRenderer(body, CAMERA, tile=32) as tiles, FrameRenderer(CAMERA) as frame:
         frame.render(body, body.default_pose(position=(0, 0, 2.5)))
         assert _live_gl_objects() > start
+        tiles.set_body(BodyModel.default(1.6, mesh="decimated"))    # same mesh, other height
+        with pytest.raises(ValueError):
+            tiles.set_body(BodyModel.default(1.6))                  # another mesh
     assert _live_gl_objects() == start
     tiles.release()                 # idempotent
