@@ -26,7 +26,7 @@ from .io import DepthSequence, Reader, convert_sequence, register_reader, sequen
 from .motion.retarget import resample_poses, retarget
 from .synth import MARKER_NAMES, ToFNoise, procedural_motion, synthesize_bvh, synthesize_procedural
 from .detect import detect_parts, geodesic_extrema, segment_foreground
-from .track import Tracker, TrackerSettings, run_tracking
+from .track import Tracker, TrackerSettings, run_tracking, track_stream
 
 from .filters import KalmanFilter, ParticleFilter, UnscentedKalmanFilter
 
@@ -38,5 +38,5 @@ __all__ = ["JOINT_NAMES", "JOINT_INDEX", "InputError", "Camera", "BodyModel", "L
            "import_c3d_markers", "DepthSequence", "Reader", "register_reader", "sequence_from_arrays",
            "convert_sequence", "retarget", "resample_poses", "MARKER_NAMES", "ToFNoise",
            "procedural_motion", "synthesize_bvh", "synthesize_procedural", "segment_foreground",
-           "geodesic_extrema", "detect_parts", "Tracker", "TrackerSettings", "run_tracking",
+           "geodesic_extrema", "detect_parts", "Tracker", "TrackerSettings", "run_tracking", "track_stream",
            "KalmanFilter", "ParticleFilter", "UnscentedKalmanFilter", "__version__"]

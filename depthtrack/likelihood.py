@@ -62,8 +62,27 @@ import numpy as np
 
 from .errors import InputError
 
-#: Encoded value of an observed background pixel in the shader's observation texture.
+#: Observed depth values that mark a pixel's class in an observation image: no reading
+#: (also NaN and negative values) and background (also values at or beyond ``max_depth``).
+NO_READING = 0.0
+BACKGROUND = np.inf
+#: The same classes in the encoded observation the shader reads (channel 0; a reading is
+#: its depth, > 0).
+NO_READING_CODE = 0.0
 BACKGROUND_CODE = -1.0
+
+#: THE sensor model (the table of the module docstring): the cost of each observed-pixel
+#: class where the model is drawn and where it is absent, as a :class:`LikelihoodParams`
+#: field name or a number; ``"smoothstep"`` is ``c(o, r)`` and ``"missing_cost"`` of a
+#: reading gives way to ``c(o, b)`` where a scene depth ``b`` is known. The numpy reference
+#: (:func:`encode_observation`, :func:`pixel_costs`), the shader's constants
+#: (:func:`shader_constants`), the tracker's unexplained share (:func:`fixed_and_empty_costs`)
+#: and the observation image of the tracker (``BACKGROUND`` for open space) all read it.
+SENSOR_MODEL = {
+    "no_reading": {"drawn": "no_reading_cost", "absent": "no_reading_cost"},
+    "background": {"drawn": "silhouette_cost", "absent": 0.0},
+    "reading": {"drawn": "smoothstep", "absent": "missing_cost"},
+}
 
 
 @dataclass(frozen=True)
@@ -100,6 +119,52 @@ class LikelihoodParams:
             raise InputError(None, f"likelihood parameters must be finite and >= 0 "
                                    f"(depth_scale > 0): {self}")
 
+
+
+def sensor_cost(params: LikelihoodParams, observed: str, model: str) -> float:
+    """The constant cost :data:`SENSOR_MODEL` gives ``(observed, model)`` under ``params``."""
+    entry = SENSOR_MODEL[observed][model]
+    if entry == "smoothstep":
+        raise ValueError(f"the cost of ({observed}, {model}) depends on the depths")
+    return float(getattr(params, entry) if isinstance(entry, str) else entry)
+
+
+def shader_constants(params: LikelihoodParams) -> dict:
+    """``#define`` values of ``tile_cost.comp``: the sensor model's codes and costs, as GLSL
+    float literals (the shader holds no number of its own)."""
+    values = {"NO_READING_CODE": NO_READING_CODE, "BACKGROUND_CODE": BACKGROUND_CODE,
+              "DEPTH_SCALE": params.depth_scale,
+              "NEIGHBOR_PENALTY": params.neighbor_penalty,
+              "SILHOUETTE_COST": sensor_cost(params, "background", "drawn"),
+              "NO_READING_COST": sensor_cost(params, "no_reading", "drawn")}
+    if sensor_cost(params, "no_reading", "absent") != values["NO_READING_COST"]:
+        raise ValueError("the shader assumes no-reading pixels cost the same drawn or absent")
+    return {k: repr(float(v)) for k, v in values.items()}
+
+
+def classify_observed(observed, params: LikelihoodParams):
+    """``(no_reading, background)`` boolean masks of an observed depth array (any shape)."""
+    o = np.asarray(observed, dtype=np.float64)
+    no_reading = np.isnan(o) | (o <= NO_READING)
+    background = ~no_reading & (np.isinf(o) | (o >= params.max_depth))
+    return no_reading, background
+
+
+def fixed_and_empty_costs(observed, params: LikelihoodParams | None = None, background=None):
+    """Mean tile costs that bound what a candidate can explain of an observed tile.
+
+    Returns
+    -------
+    fixed : float
+        The share every candidate pays whatever it draws (pixels without a reading).
+    empty : float
+        The mean cost with no body drawn (every pixel at its model-absent cost).
+    """
+    params = params or LikelihoodParams()
+    encoded = encode_observation(observed, params, background)
+    absent = encoded[..., 1].astype(np.float64)
+    fixed = np.where(encoded[..., 0] == NO_READING_CODE, absent, 0.0)
+    return float(fixed.mean()), float(absent.mean())
 
 def smoothstep(x):
     """GLSL ``smoothstep(0, 1, x)``: ``t^2 (3 - 2t)`` with ``t = clip(x, 0, 1)``; same shape as ``x``."""
@@ -156,19 +221,18 @@ def encode_observation(observed, params: LikelihoodParams, background=None) -> n
         ``[..., 1]``: the cost of this pixel when the model is absent there.
     """
     o = np.asarray(observed, dtype=np.float64)
-    o = np.where(np.isnan(o) | (o < 0), 0.0, o)
-    no_reading = o == 0
-    is_background = np.isinf(o) | (o >= params.max_depth)
-    code = np.where(is_background, BACKGROUND_CODE, np.where(no_reading, 0.0, o))
-    absent = np.full(o.shape, params.missing_cost)
+    no_reading, is_background = classify_observed(o, params)
+    o = np.where(no_reading, NO_READING_CODE, o)
+    code = np.where(is_background, BACKGROUND_CODE, o)
+    absent = np.full(o.shape, sensor_cost(params, "reading", "absent"))
     if background is not None:
         b = np.asarray(background, dtype=np.float64)
         known = np.isfinite(b) & (b > 0)
         with np.errstate(invalid="ignore"):
             scene = smoothstep(np.abs(o - b) / params.depth_scale)
         absent = np.where(known, scene, absent)
-    absent = np.where(is_background, 0.0, absent)
-    absent = np.where(no_reading, params.no_reading_cost, absent)
+    absent = np.where(is_background, sensor_cost(params, "background", "absent"), absent)
+    absent = np.where(no_reading, sensor_cost(params, "no_reading", "absent"), absent)
     return np.stack([code, absent], axis=-1).astype(np.float32)
 
 
@@ -177,9 +241,11 @@ def _pair_costs(encoded, rendered, params):
     code, absent = encoded[..., 0], encoded[..., 1]
     r = np.asarray(rendered, dtype=np.float32)
     diff = np.abs(code - r) / np.float32(params.depth_scale)
-    c = np.where(code < 0, np.float32(params.silhouette_cost), smoothstep(diff))
+    c = np.where(code == BACKGROUND_CODE, np.float32(sensor_cost(params, "background", "drawn")),
+                 smoothstep(diff))
     c = np.where(r <= 0, absent, c)
-    return np.where(code == 0, np.float32(params.no_reading_cost), c).astype(np.float64)
+    return np.where(code == NO_READING_CODE, np.float32(sensor_cost(params, "no_reading", "drawn")),
+                    c).astype(np.float64)
 
 
 def pixel_costs(rendered, observed, params: LikelihoodParams | None = None,

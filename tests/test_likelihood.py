@@ -103,3 +103,31 @@ def test_invalid_parameters_are_rejected():
         LikelihoodParams(depth_scale=0.0)
     with pytest.raises(InputError):
         LikelihoodParams(neighbor_penalty=-1.0)
+
+
+def test_one_sensor_model_table_feeds_the_shader_and_the_unexplained_bounds():
+    from depthtrack.likelihood import (BACKGROUND, BACKGROUND_CODE, NO_READING, SENSOR_MODEL,
+                                       LikelihoodParams, fixed_and_empty_costs, sensor_cost,
+                                       shader_constants, tile_costs)
+    from depthtrack.render.context import shader_source
+
+    params = LikelihoodParams(silhouette_cost=0.8, no_reading_cost=0.3)
+    consts = shader_constants(params)
+    assert float(consts["SILHOUETTE_COST"]) == sensor_cost(params, "background", "drawn") == 0.8
+    assert float(consts["NO_READING_COST"]) == 0.3
+    assert float(consts["BACKGROUND_CODE"]) == BACKGROUND_CODE
+    assert set(SENSOR_MODEL) == {"no_reading", "background", "reading"}
+    source = shader_source("tile_cost.comp")
+    for name in consts:                                   # the shader reads every constant
+        assert name in source
+    assert "u_depth_scale" not in source and "0.025" not in source
+    rng = np.random.default_rng(3)
+    observed = rng.uniform(1.0, 3.0, (16, 16))
+    observed[:4] = NO_READING
+    observed[-3:] = BACKGROUND
+    fixed, empty = fixed_and_empty_costs(observed, params)
+    nothing = np.zeros((1, 16, 16))
+    assert empty == pytest.approx(tile_costs(nothing, observed, params, smoothed=True)[0])
+    assert empty == pytest.approx(tile_costs(nothing, observed, params, smoothed=False)[0])
+    assert fixed == pytest.approx(0.3 * 64 / 256)
+    assert empty == pytest.approx(fixed + 1.0 * (256 - 64 - 48) / 256)

@@ -70,6 +70,18 @@ POSE_NAMES = tuple(
 )
 POSE_INDEX = {name: i for i, name in enumerate(POSE_NAMES)}
 
+#: The model frame's axes at the zero pose (module docstring): the body faces
+#: ``MODEL_FORWARD`` (-z) and its head points along ``MODEL_UP`` (-y). A root rotation R
+#: turns them into the body's forward and up: ``R @ MODEL_FORWARD``, ``R @ MODEL_UP``.
+MODEL_FORWARD = np.array([0.0, 0.0, -1.0])
+MODEL_UP = np.array([0.0, -1.0, 0.0])
+MODEL_FORWARD.setflags(write=False)
+MODEL_UP.setflags(write=False)
+
+#: Contract joints (depthtrack.contract.JOINT_NAMES) that move with the torso: a rigid
+#: frame to fit a root rotation to.
+TORSO_CONTRACT_JOINTS = ("neck", "pelvis", "l_shoulder", "r_shoulder", "l_hip", "r_hip")
+
 #: Skeleton joint index of each contract joint (depthtrack.contract.JOINT_NAMES),
 #: -1 for "head" which is a point fixed in the neck's frame.
 CONTRACT_SOURCE = np.array([-1, 2, 0, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14], dtype=np.int64)

@@ -89,7 +89,7 @@ def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
 def run(args) -> int:
     from ..io.sequence import open_sequence
     from ..progress import Progress
-    from ..track.tracker import run_tracking
+    from ..track import run_tracking
 
     out = Path(args.out)
     check_output(args, "out", inputs=[args.sequence], option="-o")

@@ -21,6 +21,8 @@ from .segment import check_depth, segment_foreground
 
 #: Detection classes, in the classifier's output order ("other" is never reported).
 PART_CLASSES = ("head", "hand", "foot", "other")
+#: The body parts a detection of each reported class may be (the subject's own left/right).
+CLASS_PARTS = {"head": ("head",), "hand": ("l_hand", "r_hand"), "foot": ("l_foot", "r_foot")}
 
 
 @dataclass

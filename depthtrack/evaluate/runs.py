@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 # the paper's three trackers (hc, ep, hc+ep) and two likelihoods, as the tracker defines them
-from ..track.tracker import LIKELIHOODS, METHODS
+from ..track import LIKELIHOODS, METHODS
 from . import metrics
 from .markers import known_marker_names, marker_positions
 
@@ -267,7 +267,7 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=
 
 
 def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool = True):
-    """Track a sequence as ``depthtrack track`` does (:func:`depthtrack.track.tracker.run_tracking`:
+    """Track a sequence as ``depthtrack track`` does (:func:`depthtrack.track.run.run_tracking`:
     automatic initialisation, body height from sequence.json or estimated; no ground truth).
 
     Returns
@@ -281,7 +281,7 @@ def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool =
         The tracker's summary (method, settings, timings...), as ``depthtrack track`` writes it.
     """
     from ..progress import Progress
-    from ..track.tracker import run_tracking
+    from ..track import run_tracking
 
     start = time.perf_counter()
     with Progress(len(seq), f"{method} frames", quiet=quiet) as progress:

@@ -40,7 +40,8 @@ def mipmap_is_box_mean(size: int = 64, seed: int = 0) -> bool:
 
 def _scene(body, camera: Camera, seed: int):
     pose = body.default_pose(position=(0.0, 0.1, 2.6))
-    observed = FrameRenderer(camera).render(body, pose)
+    with FrameRenderer(camera) as frame:
+        observed = frame.render(body, pose)
     observed[observed == 0] = np.inf
     observed[np.random.default_rng(seed).random(observed.shape) < 0.05] = 0.0
     uv = camera.project(body.joint_positions(pose))

@@ -157,7 +157,10 @@ class FrameRenderer:
         return (np.rint(values).astype(np.int16) - 1)
 
     def release(self) -> None:
-        """Free this renderer's GL objects (the shared context stays)."""
+        """Free this renderer's GL objects (the shared context and programs stay); idempotent.
+
+        ``with FrameRenderer(camera) as r:`` releases on leaving the block.
+        """
         for _, vaos, buffers, _ in self._bodies.values():
             for obj in (*vaos.values(), *buffers):
                 obj.release()
@@ -165,3 +168,10 @@ class FrameRenderer:
         for obj in (self._fbo, self._target, self._depth, self._bones):
             if obj is not None:
                 obj.release()
+        self._fbo = self._target = self._depth = self._bones = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..camera import Camera
 from ..errors import InputError
-from ..likelihood import LikelihoodParams, encode_observation, observation_tile
+from ..likelihood import LikelihoodParams, encode_observation, observation_tile, shader_constants
 from .context import compute, gl_context, program
 
 #: Near and far clipping planes of every view (metres).
@@ -264,15 +264,8 @@ class TileRenderer:
         if key not in self._cost_pass:
             self._cost_pass[key] = compute("tile_cost.comp", {
                 "TILE": self.tile, "SMOOTHED": int(key), "GROUP": COST_GROUP,
-                "RUN": min(COST_RUN, self.tile)})
-        prog = self._cost_pass[key]
-        p = self.params
-        prog["u_depth_scale"].value = p.depth_scale
-        prog["u_silhouette_cost"].value = p.silhouette_cost
-        prog["u_no_reading_cost"].value = p.no_reading_cost
-        if smoothed:
-            prog["u_neighbor_penalty"].value = p.neighbor_penalty
-        return prog
+                "RUN": min(COST_RUN, self.tile), **shader_constants(self.params)})
+        return self._cost_pass[key]
 
     def costs(self, poses, observed_depth=None, smoothed: bool = True, roi=None) -> np.ndarray:
         """Mean per-pixel cost of each candidate against the observation (lower is better).
@@ -317,9 +310,33 @@ class TileRenderer:
         self.ctx.memory_barrier()
         return np.frombuffer(self._costs.read(size=n * 4), np.float32).astype(np.float64)
 
+    def set_body(self, body) -> None:
+        """Render ``body`` from now on; it must have the same mesh (e.g. the same body at
+        another height: scaling lives in the skin matrices, the vertex buffer is shared)."""
+        if body.mesh is not self.body.mesh and not (
+                np.array_equal(body.mesh.vertices, self.body.mesh.vertices)
+                and np.array_equal(body.mesh.faces, self.body.mesh.faces)
+                and np.array_equal(body.mesh.joints, self.body.mesh.joints)
+                and np.array_equal(body.mesh.weights, self.body.mesh.weights)):
+            raise ValueError("set_body needs a body with the renderer's mesh")
+        self.body = body
+
     def release(self) -> None:
-        """Free the GL objects of this renderer (the shared context stays)."""
+        """Free the GL objects of this renderer (the shared context and programs stay).
+
+        Idempotent; the renderer is unusable afterwards. ``with TileRenderer(...) as r:``
+        releases on leaving the block.
+        """
         for obj in [self._vao, *self._buffers, self._fbo, self._atlas, self._depth,
                     self._observed, self._bones, self._costs]:
             if obj is not None:
                 obj.release()
+        self._vao = self._fbo = self._atlas = self._depth = None
+        self._observed = self._bones = self._costs = None
+        self._buffers = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()

@@ -7,26 +7,27 @@
 // Compile-time constants (prepended as #define lines): TILE (tile side, pixels),
 // SMOOTHED (0 = pixel-wise cost, 1 = min over the 3x3 neighbourhood plus penalty),
 // GROUP (invocations per work group, a power of two), RUN (pixels of a row handled by one
-// invocation, so that neighbouring windows share their texel fetches; divides TILE).
+// invocation, so that neighbouring windows share their texel fetches; divides TILE), and
+// the sensor model from likelihood.SENSOR_MODEL (likelihood.shader_constants): the codes
+// NO_READING_CODE and BACKGROUND_CODE of the observation texture, DEPTH_SCALE (|observed -
+// rendered| at which the cost saturates, m), SILHOUETTE_COST (model drawn where the
+// observation is background), NO_READING_COST (observed pixel without a reading, any
+// rendering), NEIGHBOR_PENALTY (explaining a pixel by one of its 8 neighbours).
 layout(local_size_x = GROUP) in;
 
 layout(binding = 0) uniform sampler2D u_atlas;     // R32F rendered z, 0 = nothing drawn
-layout(binding = 1) uniform sampler2D u_observed;  // RG32F (z | 0 no reading | -1 background, absent cost)
+layout(binding = 1) uniform sampler2D u_observed;  // RG32F (z | NO_READING_CODE | BACKGROUND_CODE, absent cost)
 layout(std430, binding = 1) writeonly buffer Costs { float costs[]; };
 
 uniform int u_first;     // candidate index of tile 0 in this pass
 uniform int u_grid;      // tiles per atlas side
-uniform float u_depth_scale;       // |observed - rendered| at which the cost saturates (m)
-uniform float u_silhouette_cost;   // model drawn where the observation is background
-uniform float u_no_reading_cost;   // observed pixel without a reading (any rendering)
-uniform float u_neighbor_penalty;  // cost of explaining a pixel by one of its 8 neighbours
 
 shared float partial[GROUP];
 
 float pair_cost(vec2 observed, float rendered) {
     if (rendered <= 0.0) return observed.y;           // model absent: precomputed per pixel
-    if (observed.x < 0.0) return u_silhouette_cost;   // model over observed background
-    return smoothstep(0.0, 1.0, abs(observed.x - rendered) / u_depth_scale);
+    if (observed.x == BACKGROUND_CODE) return SILHOUETTE_COST;   // model over observed background
+    return smoothstep(0.0, 1.0, abs(observed.x - rendered) / DEPTH_SCALE);
 }
 
 void main() {
@@ -46,9 +47,9 @@ void main() {
         }
         for (int i = 0; i < RUN; ++i) {
             observed[i] = texelFetch(u_observed, ivec2(x0 + i, y), 0).xy;
-            c[i] = observed[i].x == 0.0 ? u_no_reading_cost : pair_cost(observed[i], rendered[i + 1]);
+            c[i] = observed[i].x == NO_READING_CODE ? NO_READING_COST : pair_cost(observed[i], rendered[i + 1]);
 #if SMOOTHED
-            any_above_penalty = any_above_penalty || (observed[i].x != 0.0 && c[i] > u_neighbor_penalty);
+            any_above_penalty = any_above_penalty || (observed[i].x != NO_READING_CODE && c[i] > NEIGHBOR_PENALTY);
 #endif
         }
 #if SMOOTHED
@@ -67,13 +68,13 @@ void main() {
                 below[i] = texelFetch(u_atlas, origin + ivec2(x, yb), 0).r;
             }
             for (int i = 0; i < RUN; ++i) {
-                if (observed[i].x == 0.0 || c[i] <= u_neighbor_penalty) continue;
+                if (observed[i].x == NO_READING_CODE || c[i] <= NEIGHBOR_PENALTY) continue;
                 vec2 o = observed[i];
                 float n = min(min(min(pair_cost(o, above[i]), pair_cost(o, above[i + 1])),
                                   min(pair_cost(o, above[i + 2]), pair_cost(o, rendered[i]))),
                               min(min(pair_cost(o, rendered[i + 2]), pair_cost(o, below[i])),
                                   min(pair_cost(o, below[i + 1]), pair_cost(o, below[i + 2]))));
-                c[i] = min(c[i], n + u_neighbor_penalty);
+                c[i] = min(c[i], n + NEIGHBOR_PENALTY);
             }
         }
 #endif

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..filters.angles import wrap
+
 #: The 14 joints, parents before children (hierarchy of thesis Figure 2.2).
 SWIM_JOINTS = (
     "hips",                                   # root: hip centre
@@ -52,10 +54,8 @@ TWO_PI = 2.0 * np.pi
 
 
 def wrap_angle(angles):
-    """Map angles to [-pi, pi): ``(a + pi) mod 2 pi - pi``; any shape, dtype kept."""
-    angles = np.asarray(angles)
-    pi = angles.dtype.type(np.pi) if angles.dtype.kind == "f" else np.pi
-    return np.mod(angles + pi, 2 * pi) - pi
+    """Angles mapped to [-pi, pi] (:func:`depthtrack.filters.angles.wrap`, the one wrap)."""
+    return wrap(angles)
 
 
 def segment_vectors(joints):

@@ -93,10 +93,11 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
     vertices = marker_vertices(body)
     joints, markers = ground_truth(body, poses, vertices)
 
+    owned = None
     if renderer is None:
         from ..render import FrameRenderer
 
-        renderer = FrameRenderer(cam)
+        renderer = owned = FrameRenderer(cam)
     rng = np.random.default_rng(seed)
 
     def frames():
@@ -127,9 +128,13 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
         synth["shape"] = dict(subject)
     from ..io.sequence import write_sequence
 
-    write_sequence(out, frames(), cam, fps, depth_scale=depth_scale, joints=joints, markers=markers,
-                   marker_names=MARKER_NAMES, subject={"height_m": round(float(body.height), 4)},
-                   extra={"synth": synth})
+    try:
+        write_sequence(out, frames(), cam, fps, depth_scale=depth_scale, joints=joints,
+                       markers=markers, marker_names=MARKER_NAMES,
+                       subject={"height_m": round(float(body.height), 4)}, extra={"synth": synth})
+    finally:
+        if owned is not None:               # a renderer the caller gave stays the caller's
+            owned.release()
     return synth
 
 

@@ -90,10 +90,22 @@ def render_scene_frames(body, world_poses, camera, renderer=None, noise=None, rn
     list of SceneFrame
     """
     from ..render import FrameRenderer
-    from .scene import place_camera, scene_meshes, transform_poses
 
     world_poses = np.atleast_2d(np.asarray(world_poses, dtype=float))
-    renderer = FrameRenderer(camera) if renderer is None else renderer
+    owned = FrameRenderer(camera) if renderer is None else None
+    renderer = owned or renderer
+    try:
+        return _render_frames(body, world_poses, camera, renderer, noise, rng, distance, azimuth,
+                              camera_height, roll_deg, scenery, labels)
+    finally:
+        if owned is not None:               # a renderer the caller gave stays the caller's
+            owned.release()
+
+
+def _render_frames(body, world_poses, camera, renderer, noise, rng, distance, azimuth,
+                   camera_height, roll_deg, scenery, labels):
+    from .scene import place_camera, scene_meshes, transform_poses
+
     rng = np.random.default_rng(0) if rng is None else rng
     placement = place_camera(camera, body, world_poses, distance=distance, azimuth_deg=azimuth,
                              height=camera_height,

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+from ..body.skeleton import MODEL_FORWARD
 
 _DOWN = np.array([0.0, 1.0, 0.0])
 
@@ -46,7 +47,7 @@ def initial_heading(poses) -> np.ndarray:
     rather than end-on along its length.
     """
     R = rotvec_to_matrix(np.asarray(poses, float)[0, 3:6])
-    forward = R @ np.array([0.0, 0.0, -1.0])
+    forward = R @ MODEL_FORWARD
     if abs(forward[1]) > 0.7:
         forward = R @ np.array([1.0, 0.0, 0.0])
     forward[1] = 0.0

@@ -1,20 +1,36 @@
 """Tracking depth sequences: hill climbing, evidence propagation, data association (the ToF paper).
 
-* :mod:`.tracker` -- :class:`Tracker` (``init`` / ``step`` / ``track_sequence``), the methods
-  "hc", "ep", "hc+ep", the MAP energy, automatic initialisation and recovery;
-* :mod:`.hill_climb` -- coarse-to-fine, block-parallel search down the kinematic chain;
-* :mod:`.evidence` -- evidence propagation by iterated unscented statistical linearisation;
-* :mod:`.association` -- prune, expand and greedily try part-detection correspondences;
-* :mod:`.observation` -- the ROI, the observed image the likelihood compares with, open space,
-  the visible area and the height guess (pure functions).
+A frame is a pipeline of stages over a :class:`TrackingState` (:mod:`.state`):
+
+* :mod:`.observe` -- segment, ROI, the observed image (:mod:`.observation`: pure image functions);
+* :mod:`.search` -- predict with the motion prior, hill-climb (:mod:`.hill_climb`) the MAP
+  energy (:mod:`.energy`), and the final polish at finer tiles;
+* :mod:`.propagate` -- part detections through evidence propagation (:mod:`.evidence`) in
+  the association loop (:mod:`.association`);
+* :mod:`.judge` -- the unexplained share, lost or not, recovery by the global search;
+* :mod:`.start` -- the global search of a start; :mod:`.heading` -- the front/back check;
+  :mod:`.height` -- the body height;
+* :mod:`.tracker` -- :class:`Tracker` (owns the renderers, :mod:`.renderers`; runs the
+  stages; ``init`` / ``step`` / ``track_sequence``); :mod:`.loop` -- the frame loop and
+  :func:`track_stream`; :mod:`.run` -- :func:`run_tracking`; :mod:`.settings` -- the settings, one group per
+  stage; :mod:`.record` -- timings and counts.
 """
 from .association import associate, expand_correspondences, prune_explained
 from .evidence import PartModel, iterated_unscented_update, propagate_evidence, sigma_points
+from .height import body_for_sequence, fit_body_height
 from .hill_climb import HillClimber, SearchGroup, default_blocks
-from .tracker import (METHODS, LIKELIHOODS, Tracker, TrackerSettings, TrackResult, body_for_sequence,
-                      fit_pose_to_joints, run_tracking)
+from .settings import (AssociateSettings, EnergySettings, HeadingSettings, HeightSettings,
+                       JudgeSettings, ObserveSettings, PolishSettings, SearchSettings,
+                       StartSettings, TrackerSettings)
+from .state import TrackedFrame, TrackingState, TrackResult
+from .tracker import LIKELIHOODS, METHODS, Tracker  # before .loop and .run (it re-exports them)
+from .loop import track_stream  # noqa: E402
+from .run import fit_pose_to_joints, run_tracking  # noqa: E402
 
-__all__ = ["Tracker", "TrackerSettings", "TrackResult", "METHODS", "LIKELIHOODS", "run_tracking",
-           "body_for_sequence", "fit_pose_to_joints", "HillClimber", "SearchGroup", "default_blocks",
-           "PartModel", "propagate_evidence", "iterated_unscented_update", "sigma_points",
-           "associate", "prune_explained", "expand_correspondences"]
+__all__ = ["Tracker", "TrackerSettings", "TrackResult", "TrackingState", "TrackedFrame", "METHODS",
+           "LIKELIHOODS", "run_tracking", "track_stream", "body_for_sequence", "fit_body_height",
+           "fit_pose_to_joints", "HillClimber", "SearchGroup", "default_blocks", "PartModel",
+           "propagate_evidence", "iterated_unscented_update", "sigma_points", "associate",
+           "prune_explained", "expand_correspondences", "ObserveSettings", "EnergySettings",
+           "SearchSettings", "AssociateSettings", "PolishSettings", "JudgeSettings",
+           "StartSettings", "HeadingSettings", "HeightSettings"]

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .evidence import PART_CLASSES
+from ..detect.parts import CLASS_PARTS
 
 
 @dataclass
@@ -94,7 +94,7 @@ def prune_explained(detections, part_positions, distance: float):
     return kept
 
 
-def expand_correspondences(detections, part_names=None, classes=PART_CLASSES):
+def expand_correspondences(detections, part_names=None, classes=CLASS_PARTS):
     """Every (part, detection) pair whose classes match, best detection score first.
 
     Parameters

@@ -23,9 +23,6 @@ import numpy as np
 
 from ..motion.prior import apply_velocity
 
-#: Detection classes and the body parts each may belong to (the subject's own left/right).
-PART_CLASSES = {"head": ("head",), "hand": ("l_hand", "r_hand"), "foot": ("l_foot", "r_foot")}
-
 #: Skeleton joint carrying each part, and the joints of its chain from the root.
 PART_JOINT = {"head": "neck", "l_hand": "l_wrist", "r_hand": "r_wrist",
               "l_foot": "l_ankle", "r_foot": "r_ankle"}

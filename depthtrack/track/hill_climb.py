@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..body.rotations import rotvec_to_matrix
+from ..body.skeleton import JOINT_ID
 from ..motion.prior import apply_velocity
 
 
@@ -85,10 +86,6 @@ def _rot(joint: int):
     return (3 + 3 * joint, 4 + 3 * joint, 5 + 3 * joint)
 
 
-#: Skeleton joint indices (see depthtrack.body.skeleton).
-_J = {n: i for i, n in enumerate(("pelvis", "spine", "neck", "l_shoulder", "l_elbow", "l_wrist",
-                                  "r_shoulder", "r_elbow", "r_wrist", "l_hip", "l_knee", "l_ankle",
-                                  "r_hip", "r_knee", "r_ankle"))}
 
 
 def default_blocks(step_scale: float = 1.0, diagonals: bool = True):
@@ -100,8 +97,8 @@ def default_blocks(step_scale: float = 1.0, diagonals: bool = True):
     s = float(step_scale)
 
     def g(name, step, diag=True, compensate=()):
-        return SearchGroup(name, _rot(_J[name]), step * s, diag and diagonals,
-                           tuple(_J[c] for c in compensate))
+        return SearchGroup(name, _rot(JOINT_ID[name]), step * s, diag and diagonals,
+                           tuple(JOINT_ID[c] for c in compensate))
 
     return [
         [SearchGroup("pelvis_t", (0, 1, 2), 0.06 * s, diagonals)],

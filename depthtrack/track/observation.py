@@ -9,6 +9,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..likelihood import BACKGROUND, NO_READING
+
 
 def square_roi(mask, margin: float, min_size: int = 16):
     """Square ROI ``(u0, v0, size)`` around the True pixels of ``mask (H, W)``, or None if empty."""
@@ -38,6 +40,10 @@ def visible_area(foreground, camera) -> float:
 def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
     """No-reading pixels that are open space rather than missing readings: ``(H, W) bool``.
 
+    In the sensor model (:data:`depthtrack.likelihood.SENSOR_MODEL`) these pixels move from
+    the "no reading" row (neutral) to the "background" row (a drawn model pays the silhouette
+    cost): :func:`observation_image` writes them as ``BACKGROUND``.
+
     A ToF camera returns no reading both where the signal was lost on a surface (isolated
     dropouts, dark or grazing patches of the person) and where nothing lies within its
     range (the open background of a room deeper than the camera's range). The latter is
@@ -46,7 +52,7 @@ def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
     the segmented person ``mask (H, W) bool`` and belongs to a 4-connected no-reading
     region of at least ``min_area`` of the image (dropouts are specks, open space is not).
     """
-    zero = ~(np.asarray(depth) > 0)
+    zero = ~(np.asarray(depth) > NO_READING)       # NaN too
     k = 2 * int(clearance) + 1
     away = cv2.dilate(np.asarray(mask, np.uint8), np.ones((k, k), np.uint8)) == 0
     candidates = (zero & away).astype(np.uint8)
@@ -78,7 +84,8 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
     Returns
     -------
     (H, W) float32
-        Raw depth where the person may be, ``inf`` (background) elsewhere, 0 = no reading.
+        Raw depth where the person may be, ``BACKGROUND`` (inf) elsewhere, ``NO_READING`` (0)
+        where the camera read nothing.
         No-reading pixels of open space (:func:`out_of_range`) are background too.
     """
     depth = np.asarray(depth, dtype=np.float64)
@@ -97,7 +104,7 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
         background |= ~np.asarray(near, bool)
     background &= reading & ~np.asarray(mask, bool)
     background |= out_of_range(depth, mask)
-    out = np.where(background, np.inf, np.where(reading, depth, 0.0))
+    out = np.where(background, BACKGROUND, np.where(reading, depth, NO_READING))
     return out.astype(np.float32)
 
 

@@ -1,0 +1,136 @@
+"""The body for a sequence: its height from ``sequence.json``, else fitted by the likelihood.
+
+Every height tried is scored with one set of renderers (bodies of any height share the
+default mesh; :meth:`~.renderers.RendererSet.set_body`), released when the fit ends.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import InputError
+from .observation import estimate_height, robust_points, visible_area
+from .renderers import RendererSet
+from .settings import TrackerSettings
+
+
+def parabola_vertex(heights, energies, k: int) -> float:
+    """Height at the vertex of the parabola through the best height ``k`` and its neighbours,
+    in log height (the grid is geometric); the best height itself when the parabola opens down."""
+    x0, x1, x2 = np.log(heights[k - 1:k + 2])
+    e0, e1, e2 = energies[k - 1:k + 2]
+    denom = (x0 - x1) * (x0 - x2) * (x1 - x2)
+    a = (x2 * (e1 - e0) + x1 * (e0 - e2) + x0 * (e2 - e1)) / denom
+    b = (x2 ** 2 * (e0 - e1) + x1 ** 2 * (e2 - e0) + x0 ** 2 * (e1 - e2)) / denom
+    if a > 0:
+        return float(np.exp(np.clip(-b / (2 * a), x0, x2)))
+    return float(heights[k])
+
+
+def fit_body_height(depth, foreground, camera, fps: float = 25.0, settings=None, segmenter=None):
+    """The default body at the height whose automatic start explains ``depth`` best.
+
+    A first guess from the foreground's extent (:func:`estimate_height`), which raised arms
+    inflate and bent or foreshortened legs shrink; then the automatic start ("hc") runs on
+    the frame for heights :attr:`HeightSettings.ratio` apart around the guess (further out
+    while the best is at an edge), and the height of the lowest likelihood energy wins,
+    refined by a parabola through its neighbours.
+
+    Returns
+    -------
+    body : BodyModel
+    info : dict
+        ``height_m``, ``source``, ``foreground_guess_m``, ``seconds`` and ``candidates`` (the
+        heights tried and their likelihood energies).
+    """
+    from ..body import BodyModel
+    from .tracker import Tracker
+
+    settings = settings or TrackerSettings()
+    h_set = settings.height
+    guess = estimate_height(robust_points(foreground.points))
+    t0 = time.perf_counter()
+    tried = {}
+    renderers = None
+    try:
+        def energy_at(h):
+            nonlocal renderers
+            h = round(float(np.clip(h, h_set.min_m, h_set.max_m)), 3)
+            if h not in tried:
+                body = BodyModel.default(height=h)
+                if renderers is None:
+                    # the start never polishes: no fine renderer
+                    renderers = RendererSet(body.with_mesh("decimated"), camera,
+                                            settings.observe.tile)
+                tracker = Tracker(body, camera, method="hc", fps=fps, settings=settings,
+                                  segmenter=segmenter, renderers=renderers)
+                _, frame, x = tracker.start(tracker.state, depth, foreground=foreground)
+                tried[h] = tracker.likelihood_energy(x, frame)
+            return h
+
+        for k in range(-h_set.steps, h_set.steps + 1):
+            energy_at(guess * h_set.ratio ** k)
+        # walk outwards while the best height is at an edge of what was tried
+        for _ in range(h_set.walk):
+            heights = sorted(tried)
+            best = min(heights, key=tried.get)
+            if best == heights[0] and best > h_set.min_m:
+                energy_at(best / h_set.ratio)
+            elif best == heights[-1] and best < h_set.max_m:
+                energy_at(best * h_set.ratio)
+            else:
+                break
+    finally:
+        if renderers is not None:
+            renderers.release()
+    heights = np.array(sorted(tried))
+    energies = np.array([tried[h] for h in heights])
+    k = int(np.argmin(energies))
+    h = float(heights[k])
+    if 0 < k < len(heights) - 1:
+        h = parabola_vertex(heights, energies, k)
+    return BodyModel.default(height=h), {
+        "height_m": round(h, 3),
+        "source": "fitted to the first frame by the likelihood (no subject.height_m)",
+        "foreground_guess_m": round(guess, 3),
+        "seconds": round(time.perf_counter() - t0, 2),
+        "candidates": [{"height_m": round(float(a), 3), "energy": round(float(b), 1)}
+                       for a, b in zip(heights, energies)]}
+
+
+def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_height: bool = True):
+    """The default body scaled to the subject, and where its height came from.
+
+    Height from ``sequence.json`` ``subject.height_m`` when present. Otherwise a first
+    guess from the foreground extent of the first frame (from ``frame`` on) with a person
+    (:func:`estimate_height`); with ``fit_height`` the height is then chosen by the
+    likelihood (:func:`fit_body_height`; within :class:`HeightSettings`' range).
+
+    Returns
+    -------
+    body : BodyModel
+    height : dict
+        ``{"height_m": float, "source": str}`` and, when fitted, ``"candidates"``: the heights
+        tried and their likelihood energies.
+    """
+    from ..body import BodyModel
+
+    if seq.subject_height:
+        h = float(seq.subject_height)
+        return BodyModel.default(height=h), {"height_m": h, "source": "sequence.json subject.height_m"}
+    if segmenter is None:
+        from ..detect import segment_foreground as segmenter
+    min_area = (settings or TrackerSettings()).observe.min_person_area
+    for frame in range(frame, len(seq)):       # the first frame with a person in it
+        depth = seq.depth(frame)
+        fg = segmenter(depth, seq.camera)
+        if visible_area(fg, seq.camera) >= min_area:
+            break
+    else:
+        raise InputError(seq.path, "no person found in any frame")
+    if not fit_height:
+        guess = estimate_height(robust_points(fg.points))
+        return BodyModel.default(height=guess), {"height_m": round(guess, 3),
+                                                 "source": "estimated from the first frame's foreground"}
+    return fit_body_height(depth, fg, seq.camera, fps=seq.fps, settings=settings, segmenter=segmenter)

@@ -1,0 +1,158 @@
+"""The frame loop: depth frames in, each frame's pose out as soon as it is final.
+
+:func:`stream_poses` drives a :class:`~.tracker.Tracker` over any iterable of depth frames:
+a start on the first frame with a person (then the front/back check, :mod:`.heading`),
+:meth:`~.tracker.Tracker.advance` on every later frame, nothing on frames without a person,
+a fresh start after the track is dropped. :func:`track_stream` is the public generator;
+:meth:`Tracker.track_sequence` (and so ``depthtrack track``) runs the same loop.
+"""
+from __future__ import annotations
+
+import collections
+import itertools
+
+import numpy as np
+
+from .heading import settle_heading
+from .observe import as_depth, person_present
+from .settings import TrackerSettings
+from .state import TrackedFrame
+from .tracker import Tracker
+
+
+def stream_poses(tracker, frames, init_pose=None):
+    """Track depth frames from any iterable; yields ``(index, pose (48,) or None)`` in order.
+
+    A pose is yielded as soon as it is final: at once, except after an automatic start
+    (the front/back check tracks the next :attr:`HeadingSettings.frames` frames first)
+    and while the segmentation misses the person (the track may yet be dropped, and
+    then those frames get no pose). Frames without a person get None; tracking
+    (re)starts with the automatic start on the next frame with a person.
+
+    Parameters
+    ----------
+    frames : iterable of (H, W) float
+    init_pose : (48,) float, optional
+        Start from this pose on frame 0 (ablation: ground-truth initialisation).
+    """
+    s = tracker.settings
+    K = s.heading.frames
+    source = iter(frames)
+    pending = collections.deque()   # frames read ahead and given back
+    held = []              # (index, pose) not yet yielded: the track may still drop them
+
+    def take(n):
+        out = [pending.popleft() for _ in range(min(n, len(pending)))]
+        return out + list(itertools.islice(source, n - len(out)))
+
+    i = -1
+    while True:
+        got = take(1)
+        if not got:
+            break
+        depth, i = got[0], i + 1
+        if i == 0 and init_pose is not None:
+            tracker.state, _, x = tracker.start(tracker.state, depth, pose=init_pose)
+            held.append((i, x))
+        elif tracker.state.pose is not None:
+            _advance_into(tracker, held, i, depth)
+        else:
+            with tracker.recorder.timed("segment"):
+                fg = tracker.segmenter(depth, tracker.camera)
+            if not tracker.person_present(fg):
+                tracker.state = tracker.state.replace(
+                    frames_without_person=tracker.state.frames_without_person + 1)
+                held.append((i, None))
+            else:
+                tracker.state, frame, x = tracker.start(tracker.state, depth, foreground=fg)
+                ahead = take(K) if K > 0 else []
+                settled = None
+                if K > 0 and len(ahead) == K:
+                    settled = settle_heading(tracker.state, ahead, tracker.track_through,
+                                             tracker.turned_start(frame), s)
+                if settled is not None:
+                    tracker.state, poses = settled
+                    held.extend((i + k, p) for k, p in enumerate(poses))
+                    i += K
+                else:                       # no check: the frames read ahead come next
+                    held.append((i, x))
+                    pending.extendleft(reversed(ahead))
+        # frames of a streak without a person stay held: a dropped track drops them too
+        keep = len(held) - (tracker.state.absent if tracker.state.pose is not None else 0)
+        yield from held[:keep]
+        del held[:keep]
+    yield from held
+
+def _advance_into(tracker, held, i, depth) -> None:
+    """``advance`` on frame ``i`` as the loop does it, appending to ``held``: when the
+    track is dropped, the frames of the streak without a person lose their poses too."""
+    tracker.state, x = tracker.advance(tracker.state, depth)
+    if x is not None:
+        held.append((i, x))
+        return
+    streak = tracker.settings.observe.absent_frames - 1
+    tracker.state = tracker.state.replace(
+        frames_without_person=tracker.state.frames_without_person + streak)
+    first = max(len(held) - streak, 0)
+    held[first:] = [(j, None) for j, _ in held[first:]]
+    held.append((i, None))
+
+
+def track_stream(frames, camera, body=None, method: str = "hc+ep", likelihood: str = "smoothed",
+                 fps: float = 25.0, settings: TrackerSettings | None = None, segmenter=None,
+                 detector=None, init_pose=None, height: float | None = None):
+    """Track depth frames one at a time; yield each frame's pose and joints as soon as known.
+
+    The same loop as ``depthtrack track`` (:meth:`Tracker.stream`), over any iterable: a
+    camera driver, a file reader, a list.
+
+    Parameters
+    ----------
+    frames : iterable of (H, W) float
+        Depth in metres, 0 = no reading.
+    camera : Camera
+    body : BodyModel, optional
+        Default: the default body at ``height``, or, without ``height``, at the height fitted
+        to the first frame with a person (:func:`~.height.fit_body_height`).
+    method, likelihood, fps, settings, segmenter, detector, init_pose
+        As :class:`Tracker` and :meth:`Tracker.stream`.
+
+    Yields
+    ------
+    TrackedFrame
+        ``index``, ``pose (48,)`` and ``joints (15, 3)`` (None where there is no person).
+
+    Example
+    -------
+    >>> for f in track_stream(depth_frames, Camera.preset("sr4000"), height=1.75):  # doctest: +SKIP
+    ...     print(f.index, f.joints[0] if f.joints is not None else "nobody")
+    """
+    from ..body import BodyModel
+
+    frames = iter(frames)
+    settings = settings or TrackerSettings()
+    if body is None and height is not None:
+        body = BodyModel.default(height=float(height))
+    if body is None:
+        from .height import fit_body_height
+
+        seg = segmenter
+        if seg is None:
+            from ..detect import segment_foreground as seg
+        before = []
+        for depth in frames:
+            depth = as_depth(depth, camera)
+            before.append(depth)
+            fg = seg(depth, camera)
+            if person_present(fg, camera, settings):
+                body, _ = fit_body_height(depth, fg, camera, fps=fps, settings=settings,
+                                          segmenter=segmenter)
+                break
+        if body is None:
+            body = BodyModel.default()        # nobody in any frame: every frame gets None
+        frames = itertools.chain(before, frames)
+    with Tracker(body, camera, method=method, likelihood=likelihood, fps=fps, settings=settings,
+                 segmenter=segmenter, detector=detector) as tracker:
+        for i, x in tracker.stream(frames, init_pose=init_pose):
+            joints = None if x is None else np.asarray(body.joint_positions(x))
+            yield TrackedFrame(i, x, joints)

@@ -1,0 +1,87 @@
+"""Where the time went and what was counted: kept outside the stages, like filterpy's Saver.
+
+The stages take a :class:`Recorder` and add to it; they never read it, so whether or not a
+branch (a turned twin, a recovery) is kept, its work is counted.
+"""
+from __future__ import annotations
+
+import time
+from contextlib import contextmanager
+
+#: Timed stages (seconds). ``association`` and ``recover`` include the render, search,
+#: detect and evidence time spent inside them; ``search`` excludes its render time.
+STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover")
+#: Counters.
+COUNTS = ("candidates", "render_calls", "detections", "correspondences", "accepted",
+          "recoveries_tried", "recoveries", "frames_without_person", "reinitialisations")
+
+
+class Recorder:
+    """Seconds per stage and counts, with a snapshot taken after the first initialisation."""
+
+    def __init__(self):
+        self.timings = {k: 0.0 for k in STAGES}
+        self.counts = {k: 0 for k in COUNTS}
+        self._after_init = None
+        self._counts_after_init = {}
+
+    def add(self, stage: str, seconds: float) -> None:
+        self.timings[stage] += seconds
+
+    def count(self, name: str, n: int = 1) -> None:
+        self.counts[name] += n
+
+    @contextmanager
+    def timed(self, stage: str):
+        t = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.timings[stage] += time.perf_counter() - t
+
+    @contextmanager
+    def timed_excluding(self, stage: str, inner: str):
+        """Time ``stage`` minus what ``inner`` accumulated meanwhile (search minus render)."""
+        t = time.perf_counter()
+        before = self.timings[inner]
+        try:
+            yield
+        finally:
+            self.timings[stage] += (time.perf_counter() - t) - (self.timings[inner] - before)
+
+    def initialised(self) -> bool:
+        """Mark an initialisation done; True for the first one (the snapshot is taken then)."""
+        if self._after_init is None:
+            self._after_init = dict(self.timings)
+            self._counts_after_init = dict(self.counts)
+            return True
+        return False
+
+    def timing_summary(self, total: float, frames: int) -> dict:
+        """Where the time went: totals, and per tracked frame (initialisation excluded).
+
+        Stages (seconds): ``segment`` foreground segmentation; ``render`` candidate rendering
+        and scoring on the GPU path (TileRenderer.costs); ``search`` hill-climbing work on
+        the CPU (candidate generation, kinematics, prior); ``detect`` part detection;
+        ``evidence`` evidence propagation (unscented transform); ``association`` the whole
+        association loop (includes its detect, evidence, render and search time);
+        ``recover`` global searches after a lost track (includes their render time);
+        ``other`` = per-frame total minus segment, render, search, detect, evidence (frame
+        loading, bookkeeping).
+        """
+        base = self._after_init or {k: 0.0 for k in self.timings}
+        tracked = max(frames - 1, 1)
+        init = self.timings["init"]
+        per = {k: round(1000 * (v - base.get(k, 0.0)) / tracked, 2)
+               for k, v in self.timings.items() if k != "init"}
+        tracking = max(total - init, 1e-9)
+        per["total"] = round(1000 * tracking / tracked, 2)
+        per["other"] = round(per["total"] - sum(per[k] for k in ("segment", "render", "search",
+                                                                 "detect", "evidence")), 2)
+        cands = self.counts["candidates"] - self._counts_after_init.get("candidates", 0)
+        return {"total_s": round(total, 3), "init_s": round(init, 3), "frames": int(frames),
+                "per_frame_ms": per,
+                "fps": round(frames / total, 3) if total > 0 else None,
+                "fps_excluding_init": round(tracked / tracking, 3) if frames > 1 else None,
+                "candidates_per_frame": round(cands / tracked, 1),
+                "init_candidates": int(self._counts_after_init.get("candidates", 0))}

@@ -1,0 +1,113 @@
+"""Whole sequences: :func:`run_tracking` (what ``depthtrack track`` runs) and the
+ground-truth initialisation ablation (:func:`fit_pose_to_joints`)."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..body.rotations import matrix_to_rotvec
+from ..body.skeleton import TORSO_CONTRACT_JOINTS
+from ..contract import JOINT_INDEX
+from ..errors import InputError
+from .height import body_for_sequence
+from .tracker import Tracker
+
+#: Contract-joint indices of the torso (the root's rigid frame).
+TORSO = tuple(JOINT_INDEX[n] for n in TORSO_CONTRACT_JOINTS)
+
+
+def fit_pose_to_joints(body, joints, regularisation: float = 0.01):
+    """Least-squares pose whose contract joints match ``joints (15, 3)`` (NaN rows ignored).
+
+    Used only by the ground-truth initialisation ablation (``--init-from-groundtruth``). The
+    root comes first from the torso points (Kabsch), then every parameter is fitted with a
+    small pull ``regularisation`` toward the zero pose, which fixes the twists that joint
+    positions leave free.
+
+    Returns
+    -------
+    (48,) float
+    """
+    from scipy.optimize import least_squares
+
+    from ..motion.retarget import best_rotation
+
+    target = np.asarray(joints, dtype=np.float64)
+    known = np.all(np.isfinite(target), axis=1)
+    if known.sum() < 4:
+        raise InputError(None, "ground truth has fewer than 4 known joints in the first frame")
+    rest = np.asarray(body.joint_positions(np.zeros(body.dof)))
+    torso = [i for i in TORSO if known[i]]
+    if len(torso) < 3:
+        torso = list(np.flatnonzero(known))
+    R = best_rotation(rest[torso] - rest[torso].mean(0), target[torso] - target[torso].mean(0))
+    x0 = np.zeros(body.dof)
+    x0[3:6] = matrix_to_rotvec(R)
+    x0[0:3] = target[torso].mean(0) - R @ rest[torso].mean(0)
+
+    def residual(p):
+        d = (np.asarray(body.joint_positions(p)) - target)[known].ravel()
+        return np.concatenate([d, regularisation * p[6:]])
+
+    lo = np.where(np.isfinite(body.lower), body.lower, -np.inf)
+    hi = np.where(np.isfinite(body.upper), body.upper, np.inf)
+    x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+    fit = least_squares(residual, x0, bounds=(lo, hi), x_scale=0.3, max_nfev=200)
+    return fit.x
+
+
+def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
+                 init_from_groundtruth: bool = False, progress=None, settings=None,
+                 segmenter=None, detector=None):
+    """Track a whole sequence as ``depthtrack track`` does; no ground truth unless asked.
+
+    Parameters
+    ----------
+    seq : Sequence
+    method, likelihood : str
+    init_from_groundtruth : bool
+        ABLATION: start from a pose fitted to frame 0's ground-truth joints
+        (:func:`fit_pose_to_joints`); recorded in the summary.
+    progress : Progress or None
+    settings : TrackerSettings or None
+    segmenter, detector : callables or None (defaults from :mod:`depthtrack.detect`)
+
+    Returns
+    -------
+    result : TrackResult
+    body : BodyModel
+    summary : dict
+        For ``summary.json``: method, likelihood, initialisation, body height and its source,
+        settings, prior, timings per stage, ``seconds`` and ``processing_fps``.
+    """
+    init_pose = None
+    if init_from_groundtruth and seq.joints is None:
+        raise InputError(seq.path, "--init-from-groundtruth needs groundtruth/joints.csv")
+    body, height = body_for_sequence(seq, segmenter, settings=settings)
+    if init_from_groundtruth:
+        init_pose = fit_pose_to_joints(body, seq.joints[0])
+    with Tracker(body, seq.camera, method=method, likelihood=likelihood, fps=seq.fps,
+                 settings=settings, segmenter=segmenter, detector=detector) as tracker:
+        t0 = time.perf_counter()
+        result = tracker.track_sequence(seq, progress=progress, init_pose=init_pose)
+        seconds = time.perf_counter() - t0
+    info = result.info
+    summary = {
+        "method": method,
+        "likelihood": likelihood,
+        "init_from_groundtruth": bool(init_from_groundtruth),
+        "initialisation": ("ground truth of frame 0 (ABLATION: --init-from-groundtruth)"
+                           if init_from_groundtruth else "automatic (no ground truth used)"),
+        "initialisation_details": info["initialisation"],
+        "body_height_m": height["height_m"],
+        "body_height_source": height["source"],
+        "body_height_fit": {k: v for k, v in height.items() if k not in ("height_m", "source")} or None,
+        "seconds": round(seconds, 3),
+        "processing_fps": round(len(seq) / seconds, 3) if seconds > 0 else None,
+        "timings": result.timings,
+        "counts": info["counts"],
+        "settings": info["settings"],
+        "prior": info["prior"],
+    }
+    return result, body, summary

@@ -1,0 +1,409 @@
+"""The tracker's settings, one frozen group per stage, validated when made.
+
+:class:`TrackerSettings` nests one group per stage of a frame (see :mod:`.tracker` for the
+stages): ``observe``, ``energy``, ``search``, ``associate``, ``polish``, ``judge``, and the
+starts: ``start`` (the global search of the first frame and of a recovery), ``heading``
+(the front/back check after an automatic start) and ``height`` (the body-height fit).
+Every number of the search schedule lives here; ``TrackerSettings.to_dict()`` is written
+whole into ``summary.json``. One set serves every sequence; never tune it per clip.
+
+The flat names of the earlier single-level settings still construct and read
+(``TrackerSettings(heading_frames=0)``, ``settings.lost_ratio``): :data:`FLAT_NAMES` maps
+each to its group and field.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+from ..errors import InputError
+
+
+def _check(ok: bool, message: str) -> None:
+    if not ok:
+        raise InputError(None, message)
+
+
+def _positive(group, *names, allow_zero=False):
+    for n in names:
+        v = getattr(group, n)
+        _check(v >= 0 if allow_zero else v > 0,
+               f"{type(group).__name__}.{n} must be {'>= 0' if allow_zero else '> 0'}, not {v!r}")
+
+
+def _power_of_two(v, name, zero_ok=False):
+    _check((zero_ok and v == 0) or (4 <= v <= 1024 and not v & (v - 1)),
+           f"{name} must be a power of two in 4..1024{' or 0' if zero_ok else ''}, not {v!r}")
+
+
+@dataclass(frozen=True)
+class ObserveSettings:
+    """Observe: the ROI, the observed image and whether a person is there.
+
+    Attributes
+    ----------
+    tile : int
+        Tile side of the candidate renderer (pixels, a power of two).
+    roi_margin : float
+        Margin around the foreground box, as a fraction of its larger side.
+    predicted_margin : float
+        Margin (m at the joints' median depth) around the predicted joints that the ROI covers.
+    depth_band : float
+        Readings farther than this (m) in front of or behind the person count as background.
+    depth_percentiles : (float, float)
+        Percentiles of the foreground depth that bound the person's depth band.
+    near_dilation : int
+        Side (pixels) of the square that dilates the mask and the predicted silhouette into
+        the region where readings may belong to the person.
+    min_person_area : float
+        A frame whose foreground covers less than this (m^2) has no person in it.
+    absent_frames : int
+        During tracking the track is dropped after this many such frames in a row (a
+        segmentation that fails for a frame or two must not end a good track); those frames
+        get no pose and tracking starts afresh on the next frame with a person.
+    """
+
+    tile: int = 64
+    roi_margin: float = 0.15
+    predicted_margin: float = 0.15
+    depth_band: float = 0.4
+    depth_percentiles: tuple = (2.0, 98.0)
+    near_dilation: int = 7
+    min_person_area: float = 0.08
+    absent_frames: int = 3
+
+    def __post_init__(self):
+        _power_of_two(self.tile, "tile")
+        _positive(self, "roi_margin", "predicted_margin", "depth_band", "min_person_area",
+                  allow_zero=True)
+        _check(int(self.absent_frames) >= 1,
+               f"absent_frames must be at least 1, not {self.absent_frames}")
+        _check(self.near_dilation >= 1, f"near_dilation must be >= 1, not {self.near_dilation}")
+        object.__setattr__(self, "depth_percentiles", tuple(float(p) for p in self.depth_percentiles))
+        lo, hi = self.depth_percentiles
+        _check(0 <= lo < hi <= 100, f"depth_percentiles must be 0 <= lo < hi <= 100, not "
+                                    f"{self.depth_percentiles}")
+
+
+@dataclass(frozen=True)
+class EnergySettings:
+    """Predict and score: the motion prior and the MAP energy (:mod:`.energy`).
+
+    Attributes
+    ----------
+    damping : float
+        Velocity damping of the prediction (1 = constant velocity).
+    likelihood_weight : float
+        ``w`` of the energy.
+    pose_prior_std : float
+        Standard deviation (rad) of a weak Gaussian on every joint rotation about the zero
+        pose (0 = off). Not in the paper: where a limb is hidden the likelihood is flat and
+        the search would let it drift into any pose; this keeps it plausible while costing
+        a visible limb almost nothing (a 1.5 rad bend costs 1.1, a mismatched pixel 1).
+    """
+
+    damping: float = 0.7
+    likelihood_weight: float = 1.0
+    pose_prior_std: float = 1.0
+
+    def __post_init__(self):
+        _positive(self, "damping", "likelihood_weight", "pose_prior_std", allow_zero=True)
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """Search: the per-frame hill climbing (:mod:`.hill_climb`).
+
+    Attributes
+    ----------
+    levels : int
+        Rungs of the step ladder.
+    max_iterations : int
+        Most batches per block.
+    step_scale : float
+        Factor on the coarsest steps of :func:`~.hill_climb.default_blocks` (at 25 fps;
+        scaled by 25/fps).
+    passes : int
+        Times the schedule runs per frame.
+    diagonals : bool
+        Include the diagonal moves.
+    """
+
+    levels: int = 3
+    max_iterations: int = 8
+    step_scale: float = 1.0
+    passes: int = 2
+    diagonals: bool = False
+
+    def __post_init__(self):
+        _positive(self, "levels", "max_iterations", "step_scale", "passes")
+
+
+@dataclass(frozen=True)
+class AssociateSettings:
+    """Associate and propagate: part detections, evidence propagation, local refinement.
+
+    Attributes
+    ----------
+    prune_distance : float
+        Detections within this distance (m) of a model part count as explained.
+    ep_obs_std : float
+        Detection noise (m) in evidence propagation.
+    ep_prior_scale : float
+        Evidence propagation's prior: ``N(x_best, (scale * sigma)^2)`` in velocity space.
+    max_correspondences : int
+        Most correspondences tried per frame.
+    refine_level : int
+        Rung of the step ladder the hill climbing of a propagated pose ("hc+ep") starts on.
+    refine_with_prior : bool
+        Whether that hill climbing includes the velocity prior. Off by default: evidence
+        propagation has already weighed the prior against the detection, and the prior,
+        centred on a track that may be lost, would pull the hypothesis back before the
+        likelihood could judge it.
+    refine_scope : {"chain", "body"}
+        What that hill climbing moves: the corresponded part's chain or every joint.
+    accept : {"likelihood", "map"}
+        What a propagated-and-refined pose must improve to replace the best one.
+    accept_margin : float
+        With "likelihood": the improvement needed, in energy units.
+    """
+
+    prune_distance: float = 0.15
+    ep_obs_std: float = 0.04
+    ep_prior_scale: float = 4.0
+    max_correspondences: int = 6
+    refine_level: int = 1
+    refine_with_prior: bool = False
+    refine_scope: str = "chain"
+    accept: str = "likelihood"
+    accept_margin: float = 0.0
+
+    def __post_init__(self):
+        _check(self.refine_scope in ("chain", "body"),
+               f"refine_scope must be 'chain' or 'body', not {self.refine_scope!r}")
+        _check(self.accept in ("likelihood", "map"),
+               f"accept must be 'likelihood' or 'map', not {self.accept!r}")
+        _positive(self, "prune_distance", "ep_obs_std", "ep_prior_scale")
+        _positive(self, "max_correspondences", "refine_level", "accept_margin", allow_zero=True)
+
+
+@dataclass(frozen=True)
+class PolishSettings:
+    """Polish: the finest rung of the search once more at a finer tile resolution.
+
+    Attributes
+    ----------
+    fine_tile : int
+        Tile side of the polish (pixels); 0 = no polish.
+    fine_iterations : int
+        Most batches per block.
+    """
+
+    fine_tile: int = 128
+    fine_iterations: int = 4
+
+    def __post_init__(self):
+        _power_of_two(self.fine_tile, "fine_tile", zero_ok=True)
+        _positive(self, "fine_iterations")
+
+
+@dataclass(frozen=True)
+class JudgeSettings:
+    """Judge: whether the track is lost (then the recovery runs).
+
+    The track counts as lost when the share of the observation the fitted pose leaves
+    unexplained exceeds both ``lost_ratio`` times and ``lost_margin`` plus the median of the
+    last ``window`` frames.
+    """
+
+    lost_ratio: float = 1.6
+    lost_margin: float = 0.15
+    window: int = 8
+
+    def __post_init__(self):
+        _positive(self, "lost_ratio", "window")
+        _positive(self, "lost_margin", allow_zero=True)
+
+
+@dataclass(frozen=True)
+class StartSettings:
+    """The global search of an automatic start and of a recovery (:mod:`.start`).
+
+    Attributes
+    ----------
+    passes : int
+        Hill-climbing passes over every joint for each finalist.
+    facing_prior : float
+        Weight of the initial-heading prior, per foreground pixel.
+    step_factor, extra_levels, max_iterations : float, int, int
+        The search starts far off: steps ``step_factor`` times the per-frame ones, this many
+        more rungs, this many batches per block.
+    diagonals : bool
+        Diagonal moves in its blocks.
+    shortlist : int
+        Best scored candidates refined on the root.
+    root_blocks, root_passes : int
+        Blocks (from the root) and passes of that refinement.
+    finalists : int
+        Best of the shortlist refined on every joint (and associated, "ep" / "hc+ep").
+    associate_level : int
+        Rung the climb after a finalist's association starts on.
+    centre_push : float
+        The visible surface lies in front of the body's centre: metres pushed back along the ray.
+    axial_shifts : tuple of float
+        Shifts (m) along the body's long axis tried for every candidate.
+    """
+
+    passes: int = 3
+    facing_prior: float = 0.1
+    step_factor: float = 2.0
+    extra_levels: int = 2
+    max_iterations: int = 10
+    diagonals: bool = True
+    shortlist: int = 6
+    root_blocks: int = 2
+    root_passes: int = 2
+    finalists: int = 3
+    associate_level: int = 1
+    centre_push: float = 0.08
+    axial_shifts: tuple = (0.0, -0.3, -0.15, 0.15, 0.3)
+
+    def __post_init__(self):
+        _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
+                  "root_passes", "finalists")
+        _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",
+                  allow_zero=True)
+        object.__setattr__(self, "axial_shifts", tuple(float(s) for s in self.axial_shifts))
+
+
+@dataclass(frozen=True)
+class HeadingSettings:
+    """The front/back check after an automatic start (:mod:`.heading`).
+
+    The pose and its twin turned to face the other way are both tracked through ``frames``
+    frames; the turned one replaces the first when its unexplained share is lower by
+    ``margin`` (a fraction). 0 frames = off.
+    """
+
+    frames: int = 10
+    margin: float = 0.1
+
+    def __post_init__(self):
+        _positive(self, "frames", "margin", allow_zero=True)
+
+
+@dataclass(frozen=True)
+class HeightSettings:
+    """The body-height fit when a sequence does not give it (:mod:`.height`).
+
+    Heights ``ratio`` apart, ``steps`` either side of the foreground's guess, then at most
+    ``walk`` more outwards while the best is at an edge; all within ``min_m .. max_m``.
+    """
+
+    ratio: float = 1.08
+    steps: int = 2
+    walk: int = 3
+    min_m: float = 1.2
+    max_m: float = 2.2
+
+    def __post_init__(self):
+        _check(self.ratio > 1, f"HeightSettings.ratio must be > 1, not {self.ratio!r}")
+        _check(0 < self.min_m < self.max_m, f"HeightSettings needs 0 < min_m < max_m, not "
+                                            f"{self.min_m!r}, {self.max_m!r}")
+        _positive(self, "steps", "walk", allow_zero=True)
+
+
+#: Group name -> settings class, in the order of a frame.
+GROUPS = {"observe": ObserveSettings, "energy": EnergySettings, "search": SearchSettings,
+          "associate": AssociateSettings, "polish": PolishSettings, "judge": JudgeSettings,
+          "start": StartSettings, "heading": HeadingSettings, "height": HeightSettings}
+
+#: The earlier flat setting names -> (group, field).
+FLAT_NAMES = {
+    "tile": ("observe", "tile"), "roi_margin": ("observe", "roi_margin"),
+    "depth_band": ("observe", "depth_band"), "min_person_area": ("observe", "min_person_area"),
+    "absent_frames": ("observe", "absent_frames"),
+    "damping": ("energy", "damping"), "likelihood_weight": ("energy", "likelihood_weight"),
+    "pose_prior_std": ("energy", "pose_prior_std"),
+    "levels": ("search", "levels"), "max_iterations": ("search", "max_iterations"),
+    "step_scale": ("search", "step_scale"), "passes": ("search", "passes"),
+    "diagonals": ("search", "diagonals"),
+    "prune_distance": ("associate", "prune_distance"), "ep_obs_std": ("associate", "ep_obs_std"),
+    "ep_prior_scale": ("associate", "ep_prior_scale"),
+    "max_correspondences": ("associate", "max_correspondences"),
+    "refine_level": ("associate", "refine_level"),
+    "refine_with_prior": ("associate", "refine_with_prior"),
+    "refine_scope": ("associate", "refine_scope"), "accept": ("associate", "accept"),
+    "accept_margin": ("associate", "accept_margin"),
+    "fine_tile": ("polish", "fine_tile"), "fine_iterations": ("polish", "fine_iterations"),
+    "lost_ratio": ("judge", "lost_ratio"), "lost_margin": ("judge", "lost_margin"),
+    "init_passes": ("start", "passes"), "facing_prior": ("start", "facing_prior"),
+    "heading_frames": ("heading", "frames"), "heading_margin": ("heading", "margin"),
+}
+
+
+@dataclass(frozen=True, init=False)
+class TrackerSettings:
+    """Every setting of the tracker, one group per stage (module docstring).
+
+    ``TrackerSettings(search=SearchSettings(passes=3))`` sets a group;
+    ``TrackerSettings(heading_frames=0)`` sets a field by its flat name (:data:`FLAT_NAMES`);
+    ``TrackerSettings(**json.load(f)["settings"])`` rebuilds the settings of a summary.json;
+    an unknown name or a bad value raises :class:`~depthtrack.errors.InputError`.
+    """
+
+    observe: ObserveSettings = field(default_factory=ObserveSettings)
+    energy: EnergySettings = field(default_factory=EnergySettings)
+    search: SearchSettings = field(default_factory=SearchSettings)
+    associate: AssociateSettings = field(default_factory=AssociateSettings)
+    polish: PolishSettings = field(default_factory=PolishSettings)
+    judge: JudgeSettings = field(default_factory=JudgeSettings)
+    start: StartSettings = field(default_factory=StartSettings)
+    heading: HeadingSettings = field(default_factory=HeadingSettings)
+    height: HeightSettings = field(default_factory=HeightSettings)
+
+    def __init__(self, **kwargs):
+        groups = {}
+        for name, cls in GROUPS.items():
+            given = kwargs.pop(name, None)
+            if isinstance(given, dict):             # as to_dict() writes it (summary.json)
+                try:
+                    given = cls(**given)
+                except TypeError as exc:
+                    raise InputError(None, f"settings group {name!r}: {exc}") from None
+            if given is not None and not isinstance(given, cls):
+                raise InputError(None, f"settings group {name!r} must be a {cls.__name__}")
+            groups[name] = given if given is not None else cls()
+        changes = {}
+        for key, value in kwargs.items():
+            if key not in FLAT_NAMES:
+                raise InputError(None, f"unknown tracker setting {key!r}")
+            group, name = FLAT_NAMES[key]
+            changes.setdefault(group, {})[name] = value
+        for group, values in changes.items():
+            groups[group] = dataclasses.replace(groups[group], **values)
+        for name, value in groups.items():
+            object.__setattr__(self, name, value)
+
+    def __getattr__(self, name):
+        # only reached for names that are not groups: the flat names read through
+        if name in FLAT_NAMES:
+            group, key = FLAT_NAMES[name]
+            return getattr(getattr(self, group), key)
+        raise AttributeError(name)
+
+    def replace(self, **kwargs) -> "TrackerSettings":
+        """A copy with groups or flat-named fields changed."""
+        current = {name: getattr(self, name) for name in GROUPS}
+        flat = {k: v for k, v in kwargs.items() if k not in GROUPS}
+        current.update({k: v for k, v in kwargs.items() if k in GROUPS})
+        out = TrackerSettings(**current)
+        return TrackerSettings(**{name: getattr(out, name) for name in GROUPS}, **flat) if flat else out
+
+    def to_dict(self) -> dict:
+        """The flat names (as ``summary.json`` always had them) and every group whole."""
+        out = {key: getattr(self, key) for key in FLAT_NAMES}
+        for name in GROUPS:
+            out[name] = {k: list(v) if isinstance(v, tuple) else v
+                         for k, v in dataclasses.asdict(getattr(self, name)).items()}
+        return out

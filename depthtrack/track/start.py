@@ -1,0 +1,185 @@
+"""Starting without a previous pose: the global search of the first frame and of a recovery.
+
+Candidates: root orientations from the foreground's point cloud times arm poses
+(:data:`ARM_POSES`), placed so the model's extent along its long axis matches the
+foreground's and shifted along that axis, scored in one batch; the best
+:attr:`StartSettings.shortlist` are refined on the root, the best
+:attr:`StartSettings.finalists` on every joint (and, for "ep" / "hc+ep", associated with the
+frame's part detections), and the lowest energy plus the heading prior wins.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+from ..body.skeleton import MODEL_FORWARD, MODEL_UP, POSE_INDEX
+from ..errors import InputError
+from ..motion.retarget import rotation_between
+from .observation import robust_points
+from .propagate import associate_stage
+from .search import climb
+
+#: Arm poses tried by the global search: (shoulder rx, left shoulder rz) in radians
+#: (the right shoulder mirrors rz).
+ARM_POSES = {"relaxed": (0.0, 0.0), "t-pose": (0.0, -1.13), "raised": (0.0, -2.6),
+             "overhead": (-1.0, -2.4), "forward": (-1.4, 0.0), "down": (0.0, 0.35)}
+#: Pose slots the arm poses set: both shoulders' rx and rz.
+ARM_SLOTS = [POSE_INDEX[n] for n in ("l_shoulder_rx", "l_shoulder_rz", "r_shoulder_rx",
+                                     "r_shoulder_rz")]
+
+
+def initial_orientations(points, up):
+    """Candidate root rotations ``(K, 3, 3)`` for a foreground cloud ``points (M, 3)``.
+
+    The body's long axis (head direction) along ``up`` (standing), along +- the cloud's
+    principal axis, and along +- that axis laid parallel to the floor (lying, where the
+    visible surface is foreshortened), each turned about the axis in 45 degree steps.
+    """
+    up = np.asarray(up, dtype=np.float64)
+    centred = points - points.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    flat = vt[0] - np.dot(vt[0], up) * up
+    options = [up, vt[0], -vt[0]]
+    if np.linalg.norm(flat) > 0.2:
+        flat = flat / np.linalg.norm(flat)
+        options += [flat, -flat]
+    axes = []
+    for a in options:
+        if all(np.dot(a, b) < 0.97 for b in axes):
+            axes.append(a)
+    out = []
+    for axis in axes:
+        base = rotation_between(MODEL_UP, axis)
+        for k in range(8):
+            out.append(rotation_about(axis, k * np.pi / 4) @ base)
+    return np.array(out)
+
+
+def floor_up(foreground, points):
+    """Unit 'up' vector ``(3,)``: the floor normal toward the person, else camera -y."""
+    plane = getattr(foreground, "floor_plane", None)
+    if plane is None:
+        return np.array([0.0, -1.0, 0.0])
+    plane = np.asarray(plane, dtype=np.float64)
+    norm = np.linalg.norm(plane[:3])
+    n, d = plane[:3] / norm, plane[3] / norm
+    return n if float(np.mean(points @ n) + d) > 0 else -n
+
+
+def facing_penalty(poses, kappa: float, up=None, heading=None):
+    """Initial-heading prior ``kappa (1 - cos theta) / 2`` for poses ``(N, 48) -> (N,)``.
+
+    ``theta``: angle between the body's forward direction and the direction from the pelvis
+    to the camera (a start) or ``heading (3,)``, the last tracked forward direction (a
+    recovery: bodies keep their heading); plus the same term for the angle between the head
+    direction and ``up`` (upside-down bodies are rare). A depth image barely tells a body's
+    front from its back; people mostly face the camera when a capture starts, so among fits
+    of nearly equal likelihood the one facing the camera wins. ``kappa`` is
+    :attr:`StartSettings.facing_prior` times the foreground's pixel count.
+    """
+    poses = np.atleast_2d(poses)
+    R = rotvec_to_matrix(poses[:, 3:6])
+    forward = R @ MODEL_FORWARD
+    head = R @ MODEL_UP
+    if heading is None:
+        reference = -poses[:, 0:3] / np.linalg.norm(poses[:, 0:3], axis=1, keepdims=True)
+    else:
+        reference = np.asarray(heading)[None]
+    cos_face = np.sum(forward * reference, axis=1)
+    cos_up = head @ up if up is not None else np.ones(len(poses))
+    return kappa * 0.5 * ((1.0 - cos_face) + (1.0 - cos_up))
+
+
+def candidate_poses(points, up, centre, render_body, settings):
+    """The scored candidates of the global search: ``(poses (N, 48), orientations K)``."""
+    g = settings.start
+    rotations = initial_orientations(points, up)
+    arms = np.zeros((len(ARM_POSES), render_body.dof))
+    for k, (rx, rz) in enumerate(ARM_POSES.values()):
+        arms[k, ARM_SLOTS] = rx, rz, rx, -rz
+    poses = np.repeat(arms, len(rotations), axis=0)
+    R = np.tile(rotations, (len(ARM_POSES), 1, 1))
+    poses[:, 3:6] = matrix_to_rotvec(R)
+    body_axis = R @ MODEL_UP                                          # (K, 3) head direction
+    # model vertices at pelvis = 0, then shift so the centre and the axial extent match
+    verts = np.asarray(render_body.posed_vertices(poses))            # (K, V, 3)
+    proj_model = np.einsum("kvi,ki->kv", verts, body_axis)
+    proj_cloud = (points - centre) @ body_axis.T                     # (M, K)
+    mid_model = 0.5 * (proj_model.min(axis=1) + proj_model.max(axis=1))
+    lo, hi = np.percentile(proj_cloud, [2.0, 98.0], axis=0)
+    mid_cloud = 0.5 * (lo + hi)
+    # pelvis t = (I - a a^T)(centre - mean_model) + a (a.centre + mid_cloud - mid_model)
+    offset = centre - verts.mean(axis=1)
+    offset -= np.einsum("ki,ki->k", offset, body_axis)[:, None] * body_axis
+    poses[:, 0:3] = offset + (body_axis @ centre + mid_cloud - mid_model)[:, None] * body_axis
+    # the visible extent is foreshortened and partly hidden: also try shifts along the axis
+    shifted = [poses]
+    for shift in g.axial_shifts:
+        if shift:
+            moved = poses.copy()
+            moved[:, 0:3] += shift * body_axis
+            shifted.append(moved)
+    return np.concatenate(shifted), len(rotations)
+
+
+def global_search(tracker, energy, frame, heading=None):
+    """Find the body in ``frame`` without a previous pose (module docstring).
+
+    Parameters
+    ----------
+    tracker : Tracker
+        Supplies render body, method, settings, climbers, detector and recorder (read only).
+    energy : Energy
+        Without the motion prior.
+    frame : Frame
+        Uploaded into the renderers.
+    heading : (3,) float or None
+        Last tracked forward direction (recovery), else the body is expected to face the camera.
+
+    Returns
+    -------
+    pose : (48,) float
+    energy : float
+    info : dict
+    """
+    g = tracker.settings.start
+    rec = tracker.recorder
+    fg = frame.foreground
+    points = robust_points(fg.points)
+    if len(points) < 20:
+        raise InputError(None, "no person found in the frame (foreground is empty)")
+    up = floor_up(fg, points)
+    centre = np.median(points, axis=0)
+    # the visible surface lies in front of the body's centre: push back along the ray
+    centre = centre + g.centre_push * centre / np.linalg.norm(centre)
+    poses, n_rot = candidate_poses(points, up, centre, tracker.render_body, tracker.settings)
+    kappa = g.facing_prior * float(np.count_nonzero(fg.mask))
+    energies = energy(poses)
+    facing = facing_penalty(poses, kappa, up, heading)
+    order = np.argsort(energies + facing)
+    climber = tracker.climbers.start
+    root_blocks = climber.blocks[:g.root_blocks]
+    coarse = []
+    for i in order[:g.shortlist]:
+        x, e = climb(energy, climber, poses[i], rec, start_energy=energies[i], blocks=root_blocks,
+                     passes=g.root_passes)
+        coarse.append((e, int(i), x))
+    coarse.sort(key=lambda c: c[0])
+    best = None
+    finalists = []
+    for e, i, x in coarse[:g.finalists]:
+        x, e = climb(energy, climber, x, rec, start_energy=e, passes=g.passes)
+        if tracker.method != "hc" and tracker.detector is not None:
+            x, e, _ = associate_stage(tracker, energy, frame, x, e)
+            x, e = climb(energy, climber, x, rec, start_energy=e, level_offset=g.associate_level)
+        score = e + float(facing_penalty(x[None], kappa, up, heading)[0])
+        finalists.append({"candidate": int(i), "energy": round(float(e), 1),
+                          "score": round(score, 1)})
+        if best is None or score < best[0]:
+            best = (score, i, x, e)
+    _, i, x, e = best
+    info = {"candidates": int(len(poses)), "orientations": int(n_rot),
+            "chosen_orientation": int(i % n_rot),
+            "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)],
+            "finalists": finalists}
+    return x, e, info

@@ -1,0 +1,99 @@
+"""What one frame hands the next: :class:`TrackingState` (frozen), and the per-frame output.
+
+Stages take a state and return a new one (``dataclasses.replace``); trying an alternative
+(the turned twin, a recovery, another body height) runs a stage on a state and keeps the
+better result, with nothing to save or restore.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class TrackingState:
+    """The track between frames.
+
+    Attributes
+    ----------
+    pose : (48,) float or None
+        Last tracked pose; None before the first person or after the track was dropped.
+    velocity : (48,) float
+        Last velocity ``x_t (-) x_{t-1}`` (zero after a start or a recovery).
+    roi : (u0, v0, size) or None
+        Last region of interest (kept when a frame's foreground is empty).
+    floor : (4,) float or None
+        Last floor plane the segmentation found.
+    absent : int
+        Frames in a row without a person while tracking.
+    frames_without_person : int
+        Counter: frames that got no pose.
+    log : tuple of dict
+        Per frame: ``energy``, ``cost`` (unexplained share), ``accepted``, ``recovered``;
+        ``{"absent": True}`` when the track was dropped.
+    init_info : dict
+        How the last start went (``mode``, candidates, finalists, ``heading_check``).
+    """
+
+    pose: np.ndarray | None = None
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(48))
+    roi: tuple | None = None
+    floor: np.ndarray | None = None
+    absent: int = 0
+    frames_without_person: int = 0
+    log: tuple = ()
+    init_info: dict = field(default_factory=dict)
+
+    def replace(self, **changes) -> "TrackingState":
+        return dataclasses.replace(self, **changes)
+
+    def logged(self, entry: dict, **changes) -> "TrackingState":
+        """A copy with ``entry`` appended to the log (and ``changes``)."""
+        return dataclasses.replace(self, log=self.log + (entry,), **changes)
+
+    def recent_costs(self, window: int) -> list:
+        """Unexplained shares of the last ``window`` log entries that have one."""
+        return [f["cost"] for f in self.log[-window:] if "cost" in f]
+
+
+@dataclass
+class TrackedFrame:
+    """One frame's output of :func:`~depthtrack.track.tracker.track_stream`.
+
+    Attributes
+    ----------
+    index : int
+        Frame number, from 0.
+    pose : (48,) float or None
+        None where there is no person.
+    joints : (15, 3) float or None
+        Contract joints (camera frame, metres).
+    """
+
+    index: int
+    pose: np.ndarray | None
+    joints: np.ndarray | None
+
+
+@dataclass
+class TrackResult:
+    """Output of :meth:`Tracker.track_sequence`.
+
+    Attributes
+    ----------
+    poses : (F, 48) float
+    joints : (F, 15, 3) float
+        Contract joints (camera frame, metres).
+    timings : dict
+        :meth:`Recorder.timing_summary`: initialisation seconds, milliseconds per tracked frame
+        for each stage (``per_frame_ms``), frames per second, candidates per frame.
+    info : dict
+        Method, likelihood, settings, initialisation, per-frame energies and counts.
+    """
+
+    poses: np.ndarray
+    joints: np.ndarray
+    timings: dict
+    info: dict = field(default_factory=dict)

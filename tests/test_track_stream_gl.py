@@ -1,0 +1,118 @@
+"""track_stream yields frame by frame; tracking and the height fit leave no GL object behind."""
+import gc
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.camera import Camera
+
+CAMERA = Camera.preset("sr4000")
+
+
+def _segment(depth, camera):
+    mask = depth > 0
+    return SimpleNamespace(mask=mask, points=camera.backproject(depth)[mask], floor_plane=None)
+
+
+@pytest.fixture(scope="module")
+def frames():
+    from depthtrack.render import FrameRenderer
+
+    body = BodyModel.default(1.75)
+    poses = np.zeros((4, 48))
+    poses[:, 2] = 3.2
+    poses[:, 14] = np.linspace(-0.4, -0.8, 4)            # left arm rising
+    with FrameRenderer(CAMERA) as renderer:
+        return body, poses, [renderer.render(body, p).astype(np.float32) for p in poses]
+
+
+def _live_gl_objects():
+    """GL objects still alive (created and not released), found through the garbage collector."""
+    import moderngl
+
+    gc.collect()
+    kinds = (moderngl.Buffer, moderngl.Texture, moderngl.Framebuffer, moderngl.Renderbuffer,
+             moderngl.VertexArray)
+    return sum(1 for o in gc.get_objects()
+               if isinstance(o, kinds) and type(o.mglo).__name__ != "InvalidObject")
+
+
+def _drain(ctx) -> int:
+    """Release what was collected unreleased; returns how many."""
+    leaked = [o for o in ctx.objects if type(o).__name__ != "InvalidObject"]
+    for o in leaked:
+        o.release()
+    ctx.objects.clear()
+    return len(leaked)
+
+
+def test_track_stream_yields_each_frame_before_reading_the_next(frames):
+    from depthtrack import track_stream
+    from depthtrack.track import TrackerSettings
+
+    body, truth, depths = frames
+    pulled = []
+
+    def source():
+        for d in depths:
+            pulled.append(1)
+            yield d
+
+    seen = []
+    for f in track_stream(source(), CAMERA, body=body, method="hc", segmenter=_segment,
+                          settings=TrackerSettings(heading_frames=0)):
+        seen.append((f.index, len(pulled)))
+        err = np.linalg.norm(f.joints - body.joint_positions(truth[f.index]), axis=-1)
+        assert err.mean() < 0.05
+    assert seen == [(0, 1), (1, 2), (2, 3), (3, 4)]
+
+
+def test_tracking_and_the_height_fit_release_every_gl_object(frames):
+    from depthtrack.render import gl_context
+    from depthtrack.track import HeightSettings, TrackerSettings, fit_body_height, track_stream
+
+    body, _, depths = frames
+    ctx = gl_context()
+    mode = ctx.gc_mode
+    # collected GL objects land in ctx.objects (released ones as InvalidObject)
+    ctx.gc_mode = "context_gc"
+    _drain(ctx)
+    try:
+        from depthtrack.render import TileRenderer
+
+        TileRenderer(body, CAMERA, tile=16)             # dropped unreleased: the check sees it
+        gc.collect()
+        assert _drain(ctx) > 0
+        start = _live_gl_objects()
+        out = list(track_stream(iter(depths), CAMERA, body=body, method="hc+ep",
+                                segmenter=_segment, detector=lambda d, c, f: [],
+                                settings=TrackerSettings(heading_frames=2)))
+        assert [f.index for f in out] == [0, 1, 2, 3] and all(f.pose is not None for f in out)
+        assert _live_gl_objects() == start
+        fitted, info = fit_body_height(depths[0], _segment(depths[0], CAMERA), CAMERA,
+                                       segmenter=_segment,
+                                       settings=TrackerSettings(height=HeightSettings(steps=1, walk=1)))
+        assert len(info["candidates"]) >= 3
+        assert _live_gl_objects() == start
+        gc.collect()
+        assert _drain(ctx) == 0, "GL objects were dropped without release()"
+    finally:
+        _drain(ctx)
+        ctx.gc_mode = mode
+
+
+def test_renderers_release_on_leaving_with():
+    from depthtrack.render import FrameRenderer, TileRenderer
+
+    body = BodyModel.default(1.75, mesh="decimated")
+    start = _live_gl_objects()
+    with TileRenderer(body, CAMERA, tile=32) as tiles, FrameRenderer(CAMERA) as frame:
+        frame.render(body, body.default_pose(position=(0, 0, 2.5)))
+        assert _live_gl_objects() > start
+        tiles.set_body(BodyModel.default(1.6, mesh="decimated"))    # same mesh, other height
+        with pytest.raises(ValueError):
+            tiles.set_body(BodyModel.default(1.6))                  # another mesh
+    assert _live_gl_objects() == start
+    tiles.release()                 # idempotent
