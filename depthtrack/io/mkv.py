@@ -35,7 +35,8 @@ import numpy as np
 from ..camera import Camera
 from ..errors import InputError
 from .arrays import RecordingSequence
-from .registry import Reader, fps_from_timestamps, positive
+from .registry import Reader, fps_from_timestamps
+from .validation import finite_positive as positive
 
 #: K4A depth modes: (binned calibration resolution, crop offset, output resolution),
 #: the Azure Kinect SDK's table for a 1024 x 1024 depth sensor.

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..camera import Camera
 from ..errors import InputError
+from .validation import finite_positive
 
 #: The entry-point group other packages add readers through.
 ENTRY_POINT_GROUP = "depthtrack.readers"
@@ -297,9 +298,9 @@ def open_sequence(path, **options):
     if "intrinsics" in common:
         seq.camera = parse_intrinsics(common["intrinsics"], seq.camera.width, seq.camera.height, path)
     if "depth_units" in common:
-        seq.depth_scale = positive(common["depth_units"], "depth units", path)
+        seq.depth_scale = finite_positive(common["depth_units"], "depth units", path)
     if "fps" in common:
-        seq.fps = positive(common["fps"], "fps", path)
+        seq.fps = finite_positive(common["fps"], "fps", path)
     try:
         seq.reader = chosen.name      # which reader opened it (convert records it)
     except AttributeError:
@@ -316,17 +317,6 @@ TUM_PRESETS = {
     "freiburg3": (535.4, 539.2, 320.1, 247.6),
     "tum-ros-default": (525.0, 525.0, 319.5, 239.5),
 }
-
-
-def positive(value, what, path=None) -> float:
-    """``value`` as a positive finite float, else :class:`InputError`."""
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(path, f"{what} is not a number ({value!r})") from None
-    if not (np.isfinite(value) and value > 0):
-        raise InputError(path, f"{what} must be a positive number, not {value!r}")
-    return value
 
 
 def parse_intrinsics(spec, width: int, height: int, path=None) -> Camera:

@@ -32,7 +32,8 @@ import numpy as np
 from ..camera import Camera
 from ..errors import InputError
 from .arrays import RecordingSequence
-from .registry import Reader, fps_from_timestamps, parse_intrinsics, positive
+from .registry import Reader, fps_from_timestamps, parse_intrinsics
+from .validation import finite_positive as positive
 
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"

@@ -17,7 +17,8 @@ import numpy as np
 
 from ..errors import InputError
 from .arrays import RecordingSequence
-from .registry import Reader, fps_from_timestamps, parse_intrinsics, positive
+from .registry import Reader, fps_from_timestamps, parse_intrinsics
+from .validation import finite_positive as positive
 from .sequence import _read_png16, png_header
 
 #: Metres per unit of the benchmark's depth PNGs (5000 units per metre).
