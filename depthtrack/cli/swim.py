@@ -11,6 +11,9 @@ _EPILOG = """examples:
   depthtrack swim evaluate --train ../shared/data/cmu/126_01.bvh --test ../shared/data/cmu/126_01.bvh --report swim-report
   depthtrack swim evaluate --train T.bvh --test T.bvh --particles 1000000 --sigma 0.5 --estimator map \\
       --filter particle --init truth --json
+  depthtrack swim evaluate --train T.bvh --test T.bvh --filter rbpf,ukf-tuned,smoother --particles 100000 \
+      --noise 0.1 --gaps 10,30
+  depthtrack swim evaluate --train T.bvh --test T.bvh --test-start 566 --filter rbpf,ukf-tuned --particles 100000
   depthtrack swim train T.bvh -o model.json
   depthtrack swim derivatives T.bvh --report deriv
   depthtrack swim reconstruct markings.csv --lengths lengths.json -o joints.csv"""
@@ -83,7 +86,22 @@ def register(subparsers) -> None:
                    help="use every STEP-th frame of the test take (default 2: 60 Hz from 120 Hz mocap)")
     e.add_argument("--estimator", default="map,kmeans", help="map, kmeans or both (default both)")
     e.add_argument("--init", default="truth,random", help="truth, random or both (default both)")
-    e.add_argument("--filter", default="particle,ukf", help="particle, ukf or both (default both)")
+    e.add_argument("--filter", default="particle,ukf",
+                   help="comma-separated: particle and ukf (the thesis's, with the --sigma grid), rbpf (the "
+                        "Rao-Blackwellised particle filter on the cycle state, for each --particles count), "
+                        "ukf-tuned (the UKF with noise estimated from the training frames and the measurements), "
+                        "smoother (its RTS smoother, offline); default particle,ukf")
+    e.add_argument("--gaps", default=None, metavar="K,...",
+                   help="also withhold the measurements for stretches of K frames (every K + 40 frames from "
+                        "test frame 20) and report the errors inside and after the gaps, per stroke phase, "
+                        "against holding the last measurement, constant-velocity extrapolation and linear "
+                        "interpolation (e.g. 10,30)")
+    e.add_argument("--test-start", type=int, default=None, metavar="FRAME",
+                   help="first frame of the test window in the test take (default: the latest cycle start "
+                        "that leaves room); with the same take, training skips the cycles overlapping it")
+    e.add_argument("--stroke", default="back", choices=("back", "freestyle", "breast", "butterfly", "auto"),
+                   help="stroke, for the cycle detection: back and freestyle by the upper arm pointing up, "
+                        "the others (and auto) by periodicity (default back)")
     e.add_argument("--noise", type=float, default=0.05,
                    help="standard deviation (rad) of the noise added to the true angles to make the "
                         "measurements (default 0.05; 0 = the exact truth as in the thesis)")
@@ -152,18 +170,19 @@ def run_evaluate(args) -> int:
     random_sigmas = _floats(args.random_sigma, "--random-sigma")
     estimators = _choices(args.estimator, ("map", "kmeans"), "estimator")
     inits = _choices(args.init, ("truth", "random"), "initialisation")
-    filters = _choices(args.filter, ("particle", "ukf"), "filter")
+    filters = _choices(args.filter, ("particle", "ukf", "rbpf", "ukf-tuned", "smoother"), "filter")
+    gaps = _ints(args.gaps, "--gaps") if args.gaps else ()
     if any(s <= 0 for s in sigmas + random_sigmas):
         raise InputError(None, "sigmas must be positive")
     starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     setup = prepare(args.train, args.test, frames=args.frames, step=args.step, length=args.length,
                     smooth_sigma=args.smooth, derivative=args.derivative, temporal_sigma=args.temporal_sigma,
-                    train_starts=starts, units=args.units)
+                    train_starts=starts, units=args.units, test_start=args.test_start, stroke=args.stroke)
     setup.model.jitter = args.jitter
     log = None if (args.quiet or args.json) else (lambda text: print(text, file=sys.stderr))
     metrics, snapshot = run_evaluation(setup, particles, sigmas, estimators, inits, filters, random_sigmas,
                                        noise=args.noise, seed=args.seed, threads=args.threads, log=log,
-                                       thesis_particles=args.thesis_model_particles)
+                                       thesis_particles=args.thesis_model_particles, gaps=gaps)
     if args.report:
         write_report(metrics, args.report, setup, snapshot)
     if args.json:

@@ -263,7 +263,8 @@ def run_ukf(model: CyclicMotionModel, window: TestWindow, z, sigma: float, init:
     start = time.perf_counter()
     for t in range(1, T + 1):
         ukf.predict()
-        ukf.update(z[t])
+        if np.all(np.isfinite(z[t])):        # withheld frames (NaN): predict only
+            ukf.update(z[t])
         ukf.x[2 * A] %= 1.0
         ukf.x[2 * A + 1] = max(ukf.x[2 * A + 1], 0.05 * model.v_ref)
         est[t - 1] = ukf.x[:A]
@@ -284,6 +285,7 @@ class SwimSetup:
     units: str
     process_q: np.ndarray | None = None
     residual_count: int = 0
+    rho: float = 1.0
 
 
 def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int = 100,
@@ -295,7 +297,7 @@ def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int
     ``test_start`` (a frame of the test take) places the test window there; with the
     same take for both, training then uses only the cycles that do not overlap it.
     """
-    from .tuning import process_noise_from_residuals, training_residuals
+    from .tuning import process_noise_from_residuals, training_noise
 
     if frames < 1 or step < 1:
         raise InputError(None, "--frames and --step must be positive")
@@ -323,7 +325,7 @@ def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int
     window = make_test_window(test, first, frames, step, test_starts)
     units_note = f"{train.units_m:.6g} m per BVH unit ({train.units_source})"
     own = [(s, e) for s, e, sd in training.sources if sd == side]
-    residuals = training_residuals(model, continue_angles(joints_to_angles(train.joints)), own, step)
+    rho, residuals = training_noise(model, continue_angles(joints_to_angles(train.joints)), own, step)
     q = process_noise_from_residuals(residuals) if len(residuals) else None
     return SwimSetup(model, window, training.sources, str(train_path), str(test_path), units_note, q,
-                     len(residuals))
+                     len(residuals), rho)
