@@ -1,47 +1,44 @@
 """Rao-Blackwellised particle filter for a cyclic motion model (Doucet, de Freitas, Murphy & Russell 2000).
 
-The state splits into a low-dimensional non-linear part, the cycle state
-``s = (c, v)`` (progress and speed), and a high-dimensional part that is
-linear-Gaussian given it, the angles and angular velocities ``x = [theta, omega]``
-(D = 2A). The linear part is the *deviation* from the mean cycle: with
-``g(s) = [m(c), d(c) v L]`` (mean pose and mean velocity of the training cycles
-at progress c, velocity per frame at speed v),
+The thesis's state splits into a low-dimensional non-linear part, the cycle
+state ``s = (c, v)`` (progress and speed), and a high-dimensional part that is
+linear-Gaussian given it, the angles and angular velocities ``x (D = 2A)``::
 
-    x_t = g(s_t) + Phi (x_{t-1} - g(s_{t-1})) + w,   w ~ N(0, Q),   Phi = rho [[I, I], [0, I]]
-    z_t = H x_t + n,                                 n ~ N(0, R),   H = [I, 0]
+    x_t = F x_{t-1} + (v_{t-1} L)^2 B mu[floor(c_{t-1} L)] + w,   w ~ N(0, Q)
+    z_t = H x_t + n,                                              n ~ N(0, R)
 
-i.e. the deviation moves at constant velocity and decays by ``rho`` per frame
-(rho = 1: no decay; then ``m(c_t) - m(c_{t-1}) - d v L`` is the thesis's
-``a dt^2 / 2`` and the model is the thesis's mean motion). The cycle state
-follows the thesis's temporal model (``c += v + a_t / 2``, ``v += a_t``).
-
-Particles carry only ``s``; ``x`` is marginalised with a Kalman filter
-(Rao-Blackwellisation, Doucet et al. 2000, "Rao-Blackwellised particle
-filtering for dynamic Bayesian networks", UAI). The particles move first (the
-prior proposal for ``s``, a 2-D state that does not starve) and are weighted by
-the Kalman predictive likelihood ``N(z_t; H x_pred, S)``, which carries the
-measurement's information on all 52 linear dimensions exactly.
+(``F = [[I, I], [0, I]]``, ``B = [I/2; I]``, ``H = [I, 0]``, ``mu`` the (L, A)
+table of mean training accelerations). Particles carry only ``s``; ``x`` is
+marginalised with a Kalman filter (Rao-Blackwellisation: Doucet et al. 2000,
+"Rao-Blackwellised particle filtering for dynamic Bayesian networks", UAI;
+the weights are the Kalman predictive likelihoods ``N(z_t; H x_pred, S)``, which
+is what makes the proposal use the measurement's information on ``x`` exactly
+instead of sampling 52 dimensions and starving).
 
 Two choices make a million particles cheap (numpy, no compiled code):
 
-* ``Q`` and ``R`` do not depend on ``s``: the Kalman covariance, gain and
-  innovation covariance are shared (one 52-dim Riccati step per frame).
-* The Kalman means are *collapsed per phase cell* (``cells`` cells of the cycle):
-  after every step the means of the particles in the same cell are merged
-  (their weighted average), as in GPB1/IMM merging for switching Kalman
-  filters (Blom & Bar-Shalom 1988). A particle's innovation is then
-  ``P[new] - Q[old] + v_old B[old]`` with per-cell vectors, its log-likelihood a
-  quadratic in ``v_old`` whose coefficients are per (new cell, old cell) pair
-  tables (``cells^2`` entries, from ``cells x A`` matrix products): three table
-  look-ups per particle, no per-particle 52-vector. The merge is three
-  ``bincount`` calls and ``(cells, cells) @ (cells, D)`` products.
+* ``Q`` and ``R`` do not depend on ``s``, so the Kalman covariance, gain and
+  innovation covariance are the same for every particle: one 52-dim Riccati
+  step per frame, shared.
+* The Kalman means are *collapsed per phase cell*: after every step the means
+  of the particles whose progress falls in the same cell (one of ``L``) are
+  merged into one (their weighted average), as in GPB1/IMM merging of a
+  switching Kalman filter (Blom & Bar-Shalom 1988). A particle's mean is
+  then ``X[cell]`` and its prediction ``F X[cell] + s B mu[cell]`` is affine in
+  the scalar ``s = (v L)^2``, so its log-likelihood is
+  ``-(|a|^2 - 2 s <a, b> + s^2 |b|^2) / 2`` in the ``S^-1`` norm with per-cell
+  ``a = z - H F X``, ``b = H B mu``: three table look-ups per particle and
+  no per-particle 52-vector. The merge is two ``bincount`` calls over
+  (new cell, old cell) pairs and an ``(L, L) @ (L, D)`` product.
 
-Without the collapse this would be the exact RBPF; the particles keep exact
-weights for their step and the phase/speed posterior, the angles given the
-cell are the merged Kalman means. With ``m = d = 0`` every cell holds the same
-mean and the filter is exactly the Kalman filter (tested).
+Without the collapse this is the exact RBPF; with it, the particles still carry
+the exact weights of their current step and the phase/speed posterior; the
+angles given the phase are the merged Kalman means. With ``mu = 0`` every cell
+holds the same mean and the filter reduces exactly to the Kalman filter
+(tested).
 
-Measurements may be missing (``None``: occlusion): the filter then predicts.
+Measurements may be missing (``None``: occlusion): then the particles and the
+Kalman part only predict.
 """
 from __future__ import annotations
 
@@ -52,79 +49,57 @@ from .fastrandom import table_normals
 from .particle import low_variance_resample
 
 
-def periodic_interp(table, phase):
-    """``table (L, A)`` sampled at progress ``i / L``, linearly interpolated at ``phase (...,)``
-    (periodic; differences wrapped, so angle tables may cross +-pi) -> ``(..., A)``."""
-    table = np.asarray(table, dtype=float)
-    L = len(table)
-    u = np.mod(np.asarray(phase, dtype=float), 1.0) * L
-    i = np.floor(u).astype(int) % L
-    w = (u - np.floor(u))[..., None]
-    return table[i] + w * wrap(table[(i + 1) % L] - table[i])
-
-
-def periodic_table(table, cells: int):
-    """``table (L, A)`` at the centres ``(j + 1/2) / cells`` of ``cells`` phase cells -> ``(cells, A)``."""
-    return periodic_interp(table, (np.arange(cells) + 0.5) / cells)
-
-
 class CycleRBPF:
     """Rao-Blackwellised particle filter over ``(c, v)`` with a shared, per-cell Kalman part.
 
     Parameters
     ----------
-    mean_angles, mean_velocities : (L, A) float
-        Mean pose ``m`` and mean angular velocity ``d`` (rad per reference sample) per reference sample.
+    accel_table : (L, A) float
+        Mean acceleration per reference sample and reference sample^2 (``mu``).
     Q : (2A, 2A) float
         Process noise of ``[angles, velocities]`` per frame.
     R : (A, A) float or float
         Measurement noise covariance (a float: ``R * I``).
     x0 : (2A,) float, P0 : (2A, 2A) float
-        Initial Kalman mean (next to the first measurement) and covariance.
+        Initial Kalman mean and covariance.
     phase, speed : (N,) float
         Initial particles (cycles, cycles per frame).
-    rho : float
-        Decay of the deviation from the mean cycle per frame.
     temporal_sigma : float
         Random-acceleration noise of the cycle state, cycles per frame^2.
-    cells : int
-        Phase cells of the collapse (default 4 L).
     circular : (A,) bool, optional
-        Which angles wrap; default all.
+        Which angles wrap (innovations and merges); default all.
     resample_threshold : float
         Resample when the effective sample size falls below this fraction of N.
-    align : callable(table (C, A), reference (A,)) -> (aligned (C, A), sign (C, A)), optional
-        Re-expresses the mean-cycle poses next to a reference (the measurement) where angles
-        have several equivalent representations (the stick figure's ``(-theta, phi + pi)``);
-        ``sign`` flips the matching velocities. Default: wrap each angle next to the reference.
+    rng : numpy Generator
 
     Attributes
     ----------
-    X : (cells, 2A) float64 — Kalman mean of each cell; P : (2A, 2A) — shared covariance;
-    phase, speed : (N,) float32; log_w : (N,) float32 normalised log-weights;
-    mean_x, map_x : (2A,) estimates of the last step; ess : float.
+    X : (L, 2A) float64
+        Kalman mean of each phase cell.
+    P : (2A, 2A) float64
+        Shared Kalman covariance (posterior after :meth:`step`).
+    phase, speed : (N,) float32
+    log_w : (N,) float32
+        Normalised log-weights.
     """
 
-    def __init__(self, mean_angles, mean_velocities, Q, R, x0, P0, phase, speed, rho: float = 1.0,
-                 temporal_sigma: float = 0.0, cells: int | None = None, circular=None,
-                 resample_threshold: float = 0.5, rng=None, min_speed: float = 0.0, align=None):
-        m = np.asarray(mean_angles, dtype=float)
-        self.align = align
-        self.L, self.A = m.shape
-        A = self.A
-        self.C = 4 * self.L if cells is None else int(cells)
-        self.m = periodic_table(m, self.C)                              # (C, A) mean pose per cell
-        self.d = periodic_table(np.asarray(mean_velocities, float), self.C) * self.L   # per unit speed
-        self.rho = float(rho)
+    def __init__(self, accel_table, Q, R, x0, P0, phase, speed, temporal_sigma: float = 0.0,
+                 circular=None, resample_threshold: float = 0.5, rng=None, min_speed: float = 0.0):
+        mu = np.asarray(accel_table, dtype=float)
+        self.L, self.A = mu.shape
+        A, D = self.A, 2 * self.A
+        self.mu = mu
         self.Q = np.asarray(Q, dtype=float)
         R = np.asarray(R, dtype=float)
         self.R = R * np.eye(A) if R.ndim == 0 else R
-        self.Phi = self.rho * np.block([[np.eye(A), np.eye(A)], [np.zeros((A, A)), np.eye(A)]])
-        self.X = np.tile(np.asarray(x0, dtype=float), (self.C, 1))
+        self.F = np.block([[np.eye(A), np.eye(A)], [np.zeros((A, A)), np.eye(A)]])
+        self.Bmu = np.concatenate([0.5 * mu, mu], axis=1)          # (L, D): B mu per cell
+        self.X = np.tile(np.asarray(x0, dtype=float), (self.L, 1))
         self.P = np.asarray(P0, dtype=float).copy()
         self.phase = np.asarray(phase, dtype=np.float32).copy()
         self.speed = np.asarray(speed, dtype=np.float32).copy()
         self.log_w = np.full(len(self.phase), -np.log(len(self.phase)), np.float32)
+        self._cell = None
         self.sigma_t = float(temporal_sigma)
         self.circular = np.ones(A, bool) if circular is None else np.asarray(circular, bool)
         self.threshold = float(resample_threshold)
@@ -132,113 +107,108 @@ class CycleRBPF:
         self.min_speed = np.float32(min_speed)
         self.ess = float(len(self.phase))
         self.resampled = False
-        self.mean_x = np.asarray(x0, dtype=float).copy()
-        self.map_x = self.mean_x.copy()
-        self.map_phase, self.map_speed = float(self.phase[0]), float(self.speed[0])
-        self._cell = self.cells()
+        self.map_x = self.X[0].copy()
+        self.mean_x = self.X[0].copy()
+        self.map_phase = float(self.phase[0])
+        self.map_speed = float(self.speed[0])
+        self.P_prior = self.P.copy()
+        self.x_prior_mean = self.mean_x.copy()
 
     @property
     def n(self) -> int:
         return len(self.phase)
 
-    def cells(self):
-        """(N,) int32 phase cell ``floor(c cells)`` of each particle."""
-        idx = (self.phase * np.float32(self.C)).astype(np.int32)
-        return np.minimum(idx, self.C - 1, out=idx)
-
-    def _wrapped(self, d):
-        return np.where(self.circular, wrap(d), d)
+    def cells(self, phase=None):
+        """(N,) int phase cell ``floor(c L)`` of each particle."""
+        c = self.phase if phase is None else phase
+        idx = (c * np.float32(self.L)).astype(np.int32)
+        return np.minimum(idx, self.L - 1, out=idx)
 
     def step(self, z=None):
-        """One frame: move the cycle state, weigh by ``z (A,)`` (None: withheld, predict only), merge, resample.
+        """One frame: weigh by ``z (A,)`` (or only predict when ``z`` is None), merge, move the cycle state.
 
         Returns the posterior mean of ``[angles, velocities]`` (2A,).
         """
-        A, C, rho = self.A, self.C, self.rho
-        old, v_old = self._cell, self.speed.copy()
-        self._move()
-        new = self._cell = self.cells()
-        key = new * np.int32(C)
-        key += old
-        ref = self.mean_x[:A] if z is None else np.asarray(z, dtype=float)
-        if self.align is None:
-            mr, dr = ref + self._wrapped(self.m - ref), self.d       # mean cycle next to the reference
-        else:
-            mr, sign = self.align(self.m, ref)
-            dr = self.d * sign
-        # deviation of each cell's mean from the mean cycle (per unit old speed for the velocity part)
-        E = self._wrapped(self.X[:, :A] - mr)
-        Qo = rho * (E + self.X[:, A:])                 # angle prediction = m[new] + Qo[old] - v_old Bo[old]
-        Bo = rho * dr
-        Wo = rho * self.X[:, A:]                       # velocity prediction = d[new] v_new + Wo[old] - v_old Bo[old]
-        P_pred = self.Phi @ self.P @ self.Phi.T + self.Q
+        A, L = self.A, self.L
+        cell = self._cell if self._cell is not None else self.cells()
+        s = self.speed * np.float32(L)
+        s *= s                                                        # (N,) acceleration scale 1/k^2
+        FX = self.X @ self.F.T                                        # (L, D)
+        P_pred = self.F @ self.P @ self.F.T + self.Q
+        self.P_prior = P_pred
         if z is None:
+            alpha, beta = FX, self.Bmu                               # prediction = alpha + s beta
             lw = self.log_w
             w = np.exp(lw)
-            Kt = Kw = np.zeros((A, A))
-            Pn = np.zeros((C, A))
             self.P = P_pred
         else:
+            z = np.asarray(z, dtype=float)
             S = P_pred[:A, :A] + self.R
-            K = np.linalg.solve(S, P_pred[:A]).T                        # (D, A): P H^T S^-1
-            Kt, Kw = K[:A], K[A:]
+            K = np.linalg.solve(S, P_pred[:A]).T                      # (D, A): P H^T S^-1
             W = np.linalg.inv(S)
-            # innovation y = Pn[new] - Qo[old] + v_old Bo[old]
-            Pn = ref - mr                                               # z - m[new], wrapped
-            PW, QW, BW = Pn @ W, Qo @ W, Bo @ W
-            pp = np.einsum("ij,ij->i", PW, Pn)
-            qq = np.einsum("ij,ij->i", QW, Qo)
-            bb = np.einsum("ij,ij->i", BW, Bo)
-            qb = np.einsum("ij,ij->i", QW, Bo)
-            G1 = PW @ Qo.T                                              # (new, old) <P, Q>
-            G2 = PW @ Bo.T                                              # (new, old) <P, B>
-            t0 = (-0.5 * (pp[:, None] + qq[None, :] - 2 * G1)).astype(np.float32).ravel()
-            t1 = (qb[None, :] - G2).astype(np.float32).ravel()
-            t2 = (-0.5 * bb).astype(np.float32)
-            # log-likelihood t0 + v (t1 + v t2)
-            ll = np.take(t2, old)
-            ll *= v_old
-            ll += np.take(t1, key)
-            ll *= v_old
-            ll += np.take(t0, key)
-            ll += self.log_w
-            ll -= ll.max()
-            w = np.exp(ll)
+            # innovation of a particle: a[cell] - s b[cell]
+            a = z - FX[:, :A]
+            a = np.where(self.circular, wrap(a), a)                   # z taken next to each cell's prediction
+            b = self.Bmu[:, :A]
+            aW = a @ W
+            tab = np.stack([-0.5 * np.einsum("ij,ij->i", aW, a), np.einsum("ij,ij->i", aW, b),
+                            -0.5 * np.einsum("ij,ij->i", b @ W, b)]).astype(np.float32)   # (3, L)
+            # log-likelihood -(aa - 2 s ab + s^2 bb) / 2, as t0 + s (t1 + s t2)
+            ll = np.take(tab[2], cell)
+            ll *= s
+            ll += np.take(tab[1], cell)
+            ll *= s
+            ll += np.take(tab[0], cell)
+            lw = ll
+            lw += self.log_w
+            lw -= lw.max()
+            w = np.exp(lw)
             total = w.sum(dtype=np.float64)
             w *= np.float32(1.0 / total)
-            ll -= np.float32(np.log(total))
-            lw = ll
+            lw -= np.float32(np.log(total))
+            # posterior mean = prediction + K (a - s b): alpha + s beta
             IKH = np.eye(2 * A)
-            IKH[:, :A] -= K
+            IKH[:, :A] -= K                                           # I - K H with H = [I, 0]
+            alpha = FX + a @ K.T
+            beta = self.Bmu @ IKH.T
             self.P = IKH @ P_pred
             self.P = 0.5 * (self.P + self.P.T)
-        # merge: weighted sums per new cell (pair sums over old cells)
-        M0 = np.bincount(key, weights=w, minlength=C * C).reshape(C, C)
-        M1 = np.bincount(key, weights=w * v_old, minlength=C * C).reshape(C, C)
-        Vn = np.bincount(new, weights=w * self.speed, minlength=C)
-        tot = M0.sum(axis=1)
-        sy = tot[:, None] * Pn - M0 @ Qo + M1 @ Bo                      # sum of innovations
-        s_pred_t = tot[:, None] * mr + M0 @ Qo - M1 @ Bo                # sum of predicted angles
-        s_pred_w = Vn[:, None] * dr + M0 @ Wo - M1 @ Bo
-        sum_t = s_pred_t + sy @ Kt.T
-        sum_w = s_pred_w + sy @ Kw.T
-        live = tot > 0
-        self.X[live, :A] = sum_t[live] / tot[live, None]
-        self.X[live, A:] = sum_w[live] / tot[live, None]
-        self.mean_x = np.concatenate([sum_t.sum(0), sum_w.sum(0)]) / tot.sum()
+        # every cell's angles next to one reference (the measurement, else the last estimate)
+        ref = self.mean_x[:A] if z is None else z
+        alpha = alpha.copy()
+        alpha[:, :A] = ref + np.where(self.circular, wrap(alpha[:, :A] - ref), alpha[:, :A] - ref)
         best = int(np.argmax(lw))
-        nb, ob, vb, vn = new[best], old[best], float(v_old[best]), float(self.speed[best])
-        y = Pn[nb] - Qo[ob] + vb * Bo[ob]
-        self.map_x = np.concatenate([mr[nb] + Qo[ob] - vb * Bo[ob] + Kt @ y,
-                                     vn * dr[nb] + Wo[ob] - vb * Bo[ob] + Kw @ y])
-        self.map_phase, self.map_speed = float(self.phase[best]), vn
+        self.map_x = alpha[cell[best]] + float(s[best]) * beta[cell[best]]
+        self.map_phase, self.map_speed = float(self.phase[best]), float(self.speed[best])
         self.ess = float(1.0 / np.einsum("i,i->", w, w, dtype=np.float64))
+        ws = w * s
+        # resample (adaptively), then move the cycle state
         self.resampled = z is not None and self.ess < self.threshold * self.n
         if self.resampled:
+            # the estimate from the weighted set, before resampling adds noise
+            W0 = np.bincount(cell, weights=w, minlength=L)
+            W1 = np.bincount(cell, weights=ws, minlength=L)
+            self.mean_x = (W0 @ alpha + W1 @ beta) / W0.sum()
             idx = low_variance_resample(w, self.rng)
-            self.phase, self.speed, self._cell = self.phase[idx], self.speed[idx], self._cell[idx]
+            cell, s = cell[idx], s[idx]
+            self.phase, self.speed = self.phase[idx], self.speed[idx]
+            w = np.full(self.n, 1.0 / self.n, np.float32)
+            ws = w * s
             lw = np.full(self.n, -np.log(self.n), np.float32)
         self.log_w = lw
+        self._move()
+        new_cell = self._cell = self.cells()
+        # collapse: weighted mean of the particles' Kalman means per new cell
+        key = new_cell * np.int32(L)
+        key += cell
+        M0 = np.bincount(key, weights=w, minlength=L * L).reshape(L, L)
+        M1 = np.bincount(key, weights=ws, minlength=L * L).reshape(L, L)
+        if not self.resampled:
+            self.mean_x = (M0.sum(axis=0) @ alpha + M1.sum(axis=0) @ beta) / M0.sum()
+        tot = M0.sum(axis=1)
+        merged = M0 @ alpha + M1 @ beta
+        live = tot > 0
+        self.X[live] = merged[live] / tot[live, None]
         return self.mean_x
 
     def _move(self):

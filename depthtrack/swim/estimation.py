@@ -45,14 +45,13 @@ def tuned_runs(setup: SwimSetup, z, filters, particles, inits=("truth",), seed: 
     for init in inits:
         if "rbpf" in filters:
             for n in particles:
-                r = run_rbpf(model, window, z, n, setup.process_q, r_sigma, init, seed, progress=progress, rho=setup.rho)
+                r = run_rbpf(model, window, z, n, setup.process_q, r_sigma, init, seed, progress=progress)
                 runs.append(_record("rbpf", init, n, r, window, r_sigma))
                 if log:
                     log(f"rbpf {init} N={n}: mean {runs[-1]['estimators']['mean']['error']:.4f} "
                         f"({r['seconds']:.1f} s)")
         if "ukf-tuned" in filters or "smoother" in filters:
-            r = run_ukf_tuned(model, window, z, setup.process_q, r_sigma, init, seed, smooth="smoother" in filters,
-                              rho=setup.rho)
+            r = run_ukf_tuned(model, window, z, setup.process_q, r_sigma, init, seed, smooth="smoother" in filters)
             if "ukf-tuned" in filters:
                 runs.append(_record("ukf-tuned", init, None, r, window, r_sigma))
             if "smoother" in filters:
@@ -86,10 +85,10 @@ def gap_experiment(setup: SwimSetup, z, lengths, filters=("ukf", "rbpf", "ukf-tu
             r = run_ukf(model, window, zg, ukf_sigma, "truth", seed)
             methods["ukf"] = gap_errors(frame_errors(r["estimates"]["mean"], window)[0], mask, phase, after)
         if "rbpf" in filters and setup.process_q is not None:
-            r = run_rbpf(model, window, zg, particles, setup.process_q, r_sigma, "truth", seed, rho=setup.rho)
+            r = run_rbpf(model, window, zg, particles, setup.process_q, r_sigma, "truth", seed)
             methods["rbpf"] = gap_errors(frame_errors(r["estimates"]["mean"], window)[0], mask, phase, after)
         if ("ukf-tuned" in filters or "smoother" in filters) and setup.process_q is not None:
-            r = run_ukf_tuned(model, window, zg, setup.process_q, r_sigma, "truth", seed, rho=setup.rho)
+            r = run_ukf_tuned(model, window, zg, setup.process_q, r_sigma, "truth", seed)
             methods["ukf-tuned"] = gap_errors(frame_errors(r["estimates"]["mean"], window)[0], mask, phase, after)
             methods["smoother"] = gap_errors(frame_errors(r["smoothed"]["estimates"]["mean"], window)[0], mask,
                                              phase, after)

@@ -285,7 +285,6 @@ class SwimSetup:
     units: str
     process_q: np.ndarray | None = None
     residual_count: int = 0
-    rho: float = 1.0
 
 
 def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int = 100,
@@ -297,7 +296,7 @@ def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int
     ``test_start`` (a frame of the test take) places the test window there; with the
     same take for both, training then uses only the cycles that do not overlap it.
     """
-    from .tuning import process_noise_from_residuals, training_noise
+    from .tuning import process_noise_from_residuals, training_residuals
 
     if frames < 1 or step < 1:
         raise InputError(None, "--frames and --step must be positive")
@@ -325,7 +324,7 @@ def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int
     window = make_test_window(test, first, frames, step, test_starts)
     units_note = f"{train.units_m:.6g} m per BVH unit ({train.units_source})"
     own = [(s, e) for s, e, sd in training.sources if sd == side]
-    rho, residuals = training_noise(model, continue_angles(joints_to_angles(train.joints)), own, step)
+    residuals = training_residuals(model, continue_angles(joints_to_angles(train.joints)), own, step)
     q = process_noise_from_residuals(residuals) if len(residuals) else None
     return SwimSetup(model, window, training.sources, str(train_path), str(test_path), units_note, q,
-                     len(residuals), rho)
+                     len(residuals))

@@ -10,9 +10,7 @@ gaps); the filters then only predict with the motion model.
   state (progress, speed), a shared Kalman filter for the 52 angles and
   velocities (Doucet et al. 2000); estimates ``mean`` (posterior mean) and
   ``map`` (the best particle's Kalman mean).
-* ``ukf-tuned``: the thesis's UKF (same state, same sigma points) with the
-  RBPF's deviation model (the deviation from the mean cycle decays by ``rho``
-  per frame, so predictions through a gap fall back on the mean stroke) and the
+* ``ukf-tuned``: the thesis's UKF (same motion model and sigma points) with the
   estimated ``Q`` and ``R`` instead of the per-phase training covariance and a
   guessed sigma.
 * ``smoother``: the unscented RTS smoother (Särkkä 2008) over the tuned UKF,
@@ -26,12 +24,12 @@ import numpy as np
 
 from ..errors import InputError
 from ..filters.angles import wrap
-from ..filters.rbpf import CycleRBPF, periodic_interp
+from ..filters.rbpf import CycleRBPF
 from ..filters.smoother import rts_smooth
 from ..filters.ukf import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from ..motion.cyclic import CyclicMotionModel
 from .experiment import TestWindow, initial_state
-from .stickfigure import equivalent_branch, nearest_equivalent
+from .stickfigure import nearest_equivalent
 
 
 def _initial(model: CyclicMotionModel, window: TestWindow, z, init: str, r_sigma: float, rng):
@@ -51,7 +49,7 @@ def _initial(model: CyclicMotionModel, window: TestWindow, z, init: str, r_sigma
 
 
 def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, Q, r_sigma: float,
-             init: str = "truth", seed: int = 0, progress=None, rho: float = 1.0) -> dict:
+             init: str = "truth", seed: int = 0, progress=None) -> dict:
     """Track the window with :class:`CycleRBPF`.
 
     Parameters
@@ -62,8 +60,6 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
         Process noise of angles and velocities per frame.
     r_sigma : float
         Measurement noise per angle (rad).
-    rho : float
-        Decay of the deviation from the mean cycle per frame (:mod:`depthtrack.swim.tuning`).
 
     Returns
     -------
@@ -79,9 +75,9 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
         phase = rng.random(n_particles)
         speed = model.v_ref * rng.uniform(0.3, 2.0, n_particles)
     phase -= np.floor(phase)
-    f = CycleRBPF(model.mean_angles, model.mean_velocities, Q, r_sigma ** 2, x0, P0, phase, speed, rho=rho,
+    f = CycleRBPF(model.mean_acceleration, Q, r_sigma ** 2, x0, P0, phase, speed,
                   temporal_sigma=model.temporal_sigma, circular=model.circular, rng=rng,
-                  min_speed=0.05 * model.v_ref, align=branch_align)
+                  min_speed=0.05 * model.v_ref)
     T = window.frames
     est = {"mean": np.empty((T, A)), "map": np.empty((T, A))}
     out_phase, out_speed, ess = np.empty(T), np.empty(T), np.empty(T)
@@ -100,39 +96,8 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
             "seconds": time.perf_counter() - start}
 
 
-def branch_align(table, reference):
-    """Mean-cycle poses ``table (..., A)`` in the representation nearest ``reference`` (stick-figure
-    branches ``(-theta, phi + pi)``): ``aligned (..., A)`` and the velocity ``sign (..., A)``."""
-    aligned, flipped = equivalent_branch(table, reference)
-    sign = np.ones(aligned.shape)
-    sign[..., 0::2] = np.where(flipped, -1.0, 1.0)
-    return aligned, sign
-
-
-def deviation_transition(model: CyclicMotionModel, rho: float):
-    """The deviation model of :class:`CycleRBPF` on full states ``[angles, velocities, c, v]``:
-    ``(K, 2A + 2) -> (K, 2A + 2)``, for sigma points (mean cycle interpolated, continuous in c)."""
-    A, L = model.n_angles, model.length
-
-    def fx(x):
-        x = np.array(np.atleast_2d(x), dtype=float)
-        ang, vel, c, v = x[:, :A], x[:, A:2 * A], x[:, 2 * A], x[:, 2 * A + 1]
-        m0, s0 = branch_align(periodic_interp(model.mean_angles, c), ang)
-        e = ang - m0
-        ed = vel - s0 * periodic_interp(model.mean_velocities, c) * (v * L)[:, None]
-        c1 = c + v
-        m1, s1 = branch_align(periodic_interp(model.mean_angles, c1), ang)
-        new_ang = m1 + rho * (e + ed)
-        x[:, A:2 * A] = s1 * periodic_interp(model.mean_velocities, c1) * (v * L)[:, None] + rho * ed
-        x[:, :A] = ang + wrap(new_ang - ang)               # stay on the sigma point's branch
-        x[:, 2 * A] = c1
-        return x
-
-    return fx
-
-
 def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: float, init: str = "truth",
-                  seed: int = 0, smooth: bool = True, rho: float = 1.0) -> dict:
+                  seed: int = 0, smooth: bool = True) -> dict:
     """The UKF with the estimated noise, and (``smooth``) the unscented RTS smoother over it.
 
     Returns
@@ -165,7 +130,7 @@ def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: f
     def mean_z(sig, wm):
         return sig[0] + np.tensordot(wm, wrap(sig - sig[0]), axes=(0, 0))
 
-    ukf = UnscentedKalmanFilter(x0, P0, deviation_transition(model, rho), hx, Qfull, np.eye(A) * r_sigma ** 2,
+    ukf = UnscentedKalmanFilter(x0, P0, model.transition, hx, Qfull, np.eye(A) * r_sigma ** 2,
                                 points=MerweScaledSigmaPoints(D, alpha=0.1, beta=2.0, kappa=0.0),
                                 residual_x=model.state_residual, residual_z=lambda a, b: wrap(a - b),
                                 mean_x=mean_x, mean_z=mean_z, align_z=nearest_equivalent)

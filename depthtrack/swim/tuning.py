@@ -1,13 +1,12 @@
 """Noise levels estimated from data, not guessed: process noise from training frames, measurement noise from the measurements.
 
-* The deviation model's decay ``rho`` and process noise ``Q`` (2A x 2A) of
-  ``[angles, velocities]`` per frame: on the training take's own frames (at the
-  evaluation's frame step, phase and speed from the training cycle starts),
-  the deviations from the mean cycle ``e = theta - m(c)``, ``e_dot = omega - d(c) v L``
-  (velocities by central differences); ``rho`` by least squares of
-  ``e' = rho (e + e_dot)``, ``e_dot' = rho e_dot``, and ``Q`` the second moment of
-  the residuals of that one-step prediction (bias included: the model's
-  mean error is noise to the filter too).
+* Process noise ``Q`` (2A x 2A) of ``[angles, velocities]`` per frame: the
+  residuals of the motion model's one-step prediction on the training take's
+  own frames (at the evaluation's frame step, phase and speed from the
+  training cycle starts). Velocities are central differences of the angles;
+  the residual of frame t is ``x_{t+1} - F x_t - B mu(c_t) (v_t L)^2`` and
+  ``Q`` its second moment (bias included: the model's mean error is noise
+  to the filter too).
 * Measurement noise ``sigma^2`` per angle: from the measurements alone, by
   the third difference. For white noise, ``Var(Delta^3 z) = 20 sigma^2``
   (binomial coefficients 1, 3, 3, 1 squared and summed); the swimmer's own
@@ -23,84 +22,64 @@ import numpy as np
 from ..filters.angles import wrap
 from ..motion.cyclic import CyclicMotionModel
 from .cycles import cycle_phase
-from ..filters.rbpf import periodic_interp
-from .stickfigure import continue_angles, equivalent_branch
+from .stickfigure import continue_angles
 
 
-def deviation_sequence(model: CyclicMotionModel, angles, starts, step: int = 1):
-    """Deviations from the mean cycle on real frames, for the deviation model of
-    :class:`depthtrack.filters.rbpf.CycleRBPF`.
+def one_step_residuals(model: CyclicMotionModel, angles, starts, step: int = 1, first=None, last=None):
+    """Residuals of the model's one-step prediction on real frames.
 
     Parameters
     ----------
+    model : CyclicMotionModel
     angles : (F, A) float
-        Angles of every frame of the take (continuous).
+        Angles of every frame of the training take (continuous, :func:`continue_angles`).
     starts : (K,) int
-        Consecutive cycle-start frames (the phase is known between the first and the last).
+        Cycle-start frames of the take (the phase is known between them).
     step : int
         Frame step of the filter (2: 60 Hz from 120 Hz mocap).
+    first, last : int, optional
+        Use only frames in ``[first, last]`` (the training range).
 
     Returns
     -------
-    e, e_dot : (M, A) float
-        Angle deviation ``theta - m(c)`` and velocity deviation ``omega - d(c) v L`` per filter
-        frame (velocities are central differences; the first and last frame are dropped).
+    (M, 2A) float residuals of ``[angles, velocities]`` per filter frame.
     """
     angles = np.asarray(angles, dtype=float)
     starts = np.asarray(starts, dtype=int)
-    idx = np.arange(starts[0], starts[-1], step)
+    lo = starts[0] if first is None else max(starts[0], first)
+    hi = starts[-1] - 1 if last is None else min(starts[-1] - 1, last)
+    idx = np.arange(lo, hi + 1, step)
     if len(idx) < 5:
-        return np.zeros((0, model.n_angles)), np.zeros((0, model.n_angles))
+        return np.zeros((0, 2 * model.n_angles))
     phase, speed = cycle_phase(len(angles), starts)
     c, v = phase[idx], speed[idx] * step
     ref = model.interpolated(model.mean_angles, c[0])
     th = continue_angles(angles[idx], reference=ref)
-    om = 0.5 * (th[2:] - th[:-2])
-    th, c, v = th[1:-1], c[1:-1], v[1:-1]
-    mean, flipped = equivalent_branch(periodic_interp(model.mean_angles, c), th)
-    sign = np.ones(th.shape)
-    sign[:, 0::2] = np.where(flipped, -1.0, 1.0)
-    e = th - mean
-    e_dot = om - sign * periodic_interp(model.mean_velocities, c) * (v * model.length)[:, None]
-    return e, e_dot
+    om = np.full_like(th, np.nan)
+    om[1:-1] = 0.5 * (th[2:] - th[:-2])
+    cell = model.index(c)
+    acc = model.mean_acceleration[cell] * model.acceleration_scale(v)[:, None]
+    t = np.arange(1, len(idx) - 2)
+    r_th = wrap(th[t + 1] - th[t] - om[t] - 0.5 * acc[t])
+    r_om = om[t + 1] - om[t] - acc[t]
+    return np.concatenate([r_th, r_om], axis=1)
 
 
-def fit_reversion(pairs) -> float:
-    """Least-squares decay ``rho`` of ``e' = rho (e + e_dot)``, ``e_dot' = rho e_dot`` over the
-    ``[(e, e_dot), ...]`` sequences, clipped to [0, 1]."""
-    num = den = 0.0
-    for e, ed in pairs:
-        if len(e) < 2:
-            continue
-        a, b = e[:-1] + ed[:-1], ed[:-1]
-        num += float((e[1:] * a).sum() + (ed[1:] * b).sum())
-        den += float((a * a).sum() + (b * b).sum())
-    return float(np.clip(num / den, 0.0, 1.0)) if den > 0 else 1.0
+def training_residuals(model: CyclicMotionModel, angles, cycles, step: int = 1):
+    """:func:`one_step_residuals` over the training cycles ``[(first, end), ...]``, run by contiguous run.
 
-
-def deviation_residuals(pairs, rho: float):
-    """(M, 2A) one-step residuals ``[e' - rho (e + e_dot), e_dot' - rho e_dot]`` of the deviation model."""
-    out = [np.concatenate([e[1:] - rho * (e[:-1] + ed[:-1]), ed[1:] - rho * ed[:-1]], axis=1)
-           for e, ed in pairs if len(e) >= 2]
-    return np.concatenate(out) if out else np.zeros((0, 0))
-
-
-def training_noise(model: CyclicMotionModel, angles, cycles, step: int = 1):
-    """Decay ``rho`` and the one-step residuals of the deviation model over the training cycles
-    ``[(first, end), ...]`` (taken run by contiguous run).
-
-    Returns ``rho`` and the (M, 2A) residuals.
+    Returns (M, 2A) float.
     """
     cycles = sorted((int(a), int(b)) for a, b in cycles)
-    runs = []
+    runs, out = [], []
     for a, b in cycles:
         if runs and runs[-1][-1] == a:
             runs[-1].append(b)
         else:
             runs.append([a, b])
-    pairs = [deviation_sequence(model, angles, starts, step) for starts in runs]
-    rho = fit_reversion(pairs)
-    return rho, deviation_residuals(pairs, rho)
+    for starts in runs:
+        out.append(one_step_residuals(model, angles, starts, step))
+    return np.concatenate(out) if out else np.zeros((0, 2 * model.n_angles))
 
 
 def process_noise_from_residuals(residuals, floor: float = 1e-8):
