@@ -78,26 +78,33 @@ def gap_experiment(setup: SwimSetup, z, lengths, filters=("ukf", "rbpf", "ukf-tu
         mask = gap_mask(window.frames, k, first, spacing)
         zg = withhold(z, mask)
         methods = {}
+        def errors(est):
+            sq, joint = frame_errors(est, window)
+            return gap_errors(sq, mask, phase, after, joint=joint)
+
         for name, est in gap_baselines(z, mask, cv_window).items():
-            methods[name] = gap_errors(frame_errors(est[1:], window)[0], mask, phase, after)
+            methods[name] = errors(est[1:])
         r_sigma = estimate_measurement_noise(zg)
         if "ukf" in filters:
             r = run_ukf(model, window, zg, ukf_sigma, "truth", seed)
-            methods["ukf"] = gap_errors(frame_errors(r["estimates"]["mean"], window)[0], mask, phase, after)
+            methods["ukf"] = errors(r["estimates"]["mean"])
         if "rbpf" in filters and setup.process_q is not None:
             r = run_rbpf(model, window, zg, particles, setup.process_q, r_sigma, "truth", seed)
-            methods["rbpf"] = gap_errors(frame_errors(r["estimates"]["mean"], window)[0], mask, phase, after)
+            methods["rbpf"] = errors(r["estimates"]["mean"])
         if ("ukf-tuned" in filters or "smoother" in filters) and setup.process_q is not None:
             r = run_ukf_tuned(model, window, zg, setup.process_q, r_sigma, "truth", seed)
-            methods["ukf-tuned"] = gap_errors(frame_errors(r["estimates"]["mean"], window)[0], mask, phase, after)
-            methods["smoother"] = gap_errors(frame_errors(r["smoothed"]["estimates"]["mean"], window)[0], mask,
-                                             phase, after)
+            methods["ukf-tuned"] = errors(r["estimates"]["mean"])
+            methods["smoother"] = errors(r["smoothed"]["estimates"]["mean"])
         cv = methods["constant_velocity"]["inside"]
+        cv_cm = methods["constant_velocity"]["inside_cm"]
         ratio = {name: (None if not m["inside"] else round(cv / m["inside"], 3))
                  for name, m in methods.items() if name in ("ukf", "rbpf", "ukf-tuned", "smoother")}
+        ratio_cm = {name: (None if not m["inside_cm"] else round(cv_cm / m["inside_cm"], 3))
+                    for name, m in methods.items() if name in ratio}
         out.append({"length": int(k), "first": first, "spacing": spacing, "after": after, "cv_window": cv_window,
                     "rbpf_particles": particles, "ukf_sigma": ukf_sigma,
-                    "gaps": [[int(a), int(b)] for a, b in gap_runs(mask)], "methods": methods, "ratio_cv": ratio})
+                    "gaps": [[int(a), int(b)] for a, b in gap_runs(mask)], "methods": methods, "ratio_cv": ratio,
+                    "ratio_cv_cm": ratio_cm})
         if log:
             log(f"gaps of {k}: " + ", ".join(f"{n} {m['inside']:.3f}" for n, m in methods.items()
                                             if m["inside"] is not None))
@@ -129,10 +136,11 @@ def markdown_new(metrics: dict) -> str:
         out.append(f"\n### Gaps of {g['length']} frames (test frames {g['gaps']}); error inside the gaps, "
                    f"in the {g['after']} frames after, per quarter of the cycle inside\n")
         out.append("| method | inside | after | inside, c in [0, .25) | [.25, .5) | [.5, .75) | [.75, 1) | "
-                   "CV / method |")
-        out.append("|---|---:|---:|---:|---:|---:|---:|---:|")
+                   "CV / method | inside (cm) | CV / method (cm) |")
+        out.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for name, m in g["methods"].items():
-            ratio = g["ratio_cv"].get(name)
+            ratio, ratio_cm = g["ratio_cv"].get(name), g.get("ratio_cv_cm", {}).get(name)
             out.append(f"| {name} | {_fmt(m['inside'])} | {_fmt(m['after'])} | " +
-                       " | ".join(_fmt(x) for x in m["inside_per_phase"]) + f" | {_fmt(ratio, 1)} |")
+                       " | ".join(_fmt(x) for x in m["inside_per_phase"]) + f" | {_fmt(ratio, 1)} | "
+                       f"{_fmt(m.get('inside_cm'), 1)} | {_fmt(ratio_cm, 1)} |")
     return "\n".join(out) + ("\n" if out else "")

@@ -83,7 +83,7 @@ def after_mask(mask, after: int = 10):
     return out & ~mask
 
 
-def gap_errors(sq, mask, phase, after: int = 10, bins: int = 4) -> dict:
+def gap_errors(sq, mask, phase, after: int = 10, bins: int = 4, joint=None) -> dict:
     """Errors inside and after the gaps, overall and per stroke phase.
 
     Parameters
@@ -94,6 +94,8 @@ def gap_errors(sq, mask, phase, after: int = 10, bins: int = 4) -> dict:
         Withheld frames (frame 0 first).
     phase : (T,) float
         True cycle progress of frames 1 .. T (the phase bins are quarters of the cycle by default).
+    joint : (T,) float, optional
+        Mean joint-position error (m) of frames 1 .. T: adds ``inside_cm`` and ``after_cm``.
 
     Returns
     -------
@@ -109,7 +111,12 @@ def gap_errors(sq, mask, phase, after: int = 10, bins: int = 4) -> dict:
     def mean(sel):
         return float(sq[sel].mean()) if sel.any() else None
 
-    return {"inside": mean(inside), "after": mean(post),
+    out = {"inside": mean(inside), "after": mean(post),
             "inside_per_phase": [mean(inside & (b == k)) for k in range(bins)],
             "after_per_phase": [mean(post & (b == k)) for k in range(bins)],
             "frames_inside": int(inside.sum()), "frames_after": int(post.sum())}
+    if joint is not None:
+        joint = 100 * np.asarray(joint, dtype=float)
+        out["inside_cm"] = float(joint[inside].mean()) if inside.any() else None
+        out["after_cm"] = float(joint[post].mean()) if post.any() else None
+    return out
