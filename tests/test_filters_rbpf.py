@@ -14,8 +14,8 @@ def _system(A=3, seed=0):
     return rng, Q, rng.normal(size=2 * A) * 0.1, np.eye(2 * A) * 0.01
 
 
-def _F(A):
-    return np.block([[np.eye(A), np.eye(A)], [np.zeros((A, A)), np.eye(A)]])
+def _F(A, rho=1.0):
+    return np.block([[np.eye(A), rho * np.eye(A)], [np.zeros((A, A)), rho * np.eye(A)]])
 
 
 def test_rbpf_without_a_mean_acceleration_is_the_kalman_filter():
@@ -23,11 +23,11 @@ def test_rbpf_without_a_mean_acceleration_is_the_kalman_filter():
     rng, Q, x0, P0 = _system(A)
     n = 500
     f = CycleRBPF(np.zeros((10, A)), Q, 0.05 ** 2, x0, P0, rng.random(n), np.full(n, 0.013),
-                  temporal_sigma=1e-3, rng=rng)
-    kf = KalmanFilter(x0, P0, _F(A), np.eye(A, 2 * A), Q, 0.05 ** 2 * np.eye(A))
+                  temporal_sigma=1e-3, rng=rng, velocity_table=np.zeros((10, A)), rho=0.8)
+    kf = KalmanFilter(x0, P0, _F(A, 0.8), np.eye(A, 2 * A), Q, 0.05 ** 2 * np.eye(A))
     x = x0.copy()
     for t in range(25):
-        x = _F(A) @ x + rng.multivariate_normal(np.zeros(2 * A), Q)
+        x = _F(A, 0.8) @ x + rng.multivariate_normal(np.zeros(2 * A), Q)
         z = x[:A] + 0.05 * rng.normal(size=A) if t % 7 != 3 else None      # a withheld frame now and then
         kf.predict()
         if z is not None:
@@ -40,18 +40,21 @@ def test_rbpf_without_a_mean_acceleration_is_the_kalman_filter():
 
 def test_rbpf_with_a_known_cycle_state_is_the_kalman_filter_with_the_acceleration_as_input():
     """All particles share (c, v) and move deterministically: one Kalman filter with the control
-    input (v L)^2 B mu[floor(c L)]."""
-    A, L, v = 2, 8, np.float32(0.02)
+    input r^2 [mu / 2, mu] + (1 - rho) r [d, d] at floor(c L), r = v L."""
+    A, L, v, rho = 2, 8, np.float32(0.02), 0.9
     rng, Q, x0, P0 = _system(A, 1)
-    mu = rng.normal(size=(L, A)) * 0.01
+    mu, d = rng.normal(size=(L, A)) * 0.01, rng.normal(size=(L, A)) * 0.1
     n = 50
-    f = CycleRBPF(mu, Q, 0.05 ** 2, x0, P0, np.full(n, 0.1), np.full(n, v), temporal_sigma=0.0, rng=rng)
+    f = CycleRBPF(mu, Q, 0.05 ** 2, x0, P0, np.full(n, 0.1), np.full(n, v), temporal_sigma=0.0, rng=rng,
+                  velocity_table=d, rho=rho)
     H = np.eye(A, 2 * A)
+    F = _F(A, rho)
     x, P, c = x0.copy(), P0.copy(), np.float32(0.1)
     for t in range(30):
         cell = int(np.floor(c * np.float32(L)))
-        x = _F(A) @ x + float(v * L) ** 2 * np.concatenate([0.5 * mu[cell], mu[cell]])
-        P = _F(A) @ P @ _F(A).T + Q
+        r = float(v * np.float32(L))
+        x = F @ x + r ** 2 * np.concatenate([0.5 * mu[cell], mu[cell]]) + (1 - rho) * r * np.tile(d[cell], 2)
+        P = F @ P @ F.T + Q
         z = x[:A] + 0.1 * rng.normal(size=A)
         S = H @ P @ H.T + 0.05 ** 2 * np.eye(A)
         K = P @ H.T @ np.linalg.inv(S)

@@ -4,11 +4,20 @@ The thesis's state splits into a low-dimensional non-linear part, the cycle
 state ``s = (c, v)`` (progress and speed), and a high-dimensional part that is
 linear-Gaussian given it, the angles and angular velocities ``x (D = 2A)``::
 
-    x_t = F x_{t-1} + (v_{t-1} L)^2 B mu[floor(c_{t-1} L)] + w,   w ~ N(0, Q)
-    z_t = H x_t + n,                                              n ~ N(0, R)
+    theta_t = theta + rho omega + (1 - rho) d(c) r + mu(c) r^2 / 2
+    omega_t = rho omega + (1 - rho) d(c) r + mu(c) r^2           (+ w ~ N(0, Q))
+    z_t = theta_t + n,  n ~ N(0, R)
 
-(``F = [[I, I], [0, I]]``, ``B = [I/2; I]``, ``H = [I, 0]``, ``mu`` the (L, A)
-table of mean training accelerations). Particles carry only ``s``; ``x`` is
+with ``r = v L`` (the speed relative to the reference cycle, so ``r^2 = 1/k^2``),
+``mu`` and ``d`` the (L, A) tables of mean training acceleration and velocity at
+``floor(c L)``, all of the previous frame. With ``rho = 1`` this is the thesis's
+model (``a ~ mu / k^2``, equations 4.12-4.19, noise from the data); ``rho < 1``
+lets the velocity's deviation from the mean stroke's velocity decay, so
+predictions through a gap follow the mean stroke's motion instead of
+extrapolating a velocity error (``rho`` is fitted on training frames,
+:mod:`depthtrack.swim.tuning`).
+
+Particles carry only ``s``; ``x`` is
 marginalised with a Kalman filter (Rao-Blackwellisation: Doucet et al. 2000,
 "Rao-Blackwellised particle filtering for dynamic Bayesian networks", UAI;
 the weights are the Kalman predictive likelihoods ``N(z_t; H x_pred, S)``, which
@@ -55,7 +64,14 @@ class CycleRBPF:
     Parameters
     ----------
     accel_table : (L, A) float
-        Mean acceleration per reference sample and reference sample^2 (``mu``).
+        Mean acceleration per reference sample^2 (``mu``).
+    velocity_table : (L, A) float, optional
+        Mean velocity per reference sample (``d``); needed when ``rho < 1``.
+    rho : float
+        Decay of the velocity's deviation from the mean stroke per frame (1: the thesis's model).
+    gap_rho : float, optional
+        The decay used on frames without a measurement (default ``rho``): a model fitted for
+        predicting many frames ahead can differ from the best one-step model.
     Q : (2A, 2A) float
         Process noise of ``[angles, velocities]`` per frame.
     R : (A, A) float or float
@@ -84,7 +100,8 @@ class CycleRBPF:
     """
 
     def __init__(self, accel_table, Q, R, x0, P0, phase, speed, temporal_sigma: float = 0.0,
-                 circular=None, resample_threshold: float = 0.5, rng=None, min_speed: float = 0.0):
+                 circular=None, resample_threshold: float = 0.5, rng=None, min_speed: float = 0.0,
+                 velocity_table=None, rho: float = 1.0, gap_rho=None):
         mu = np.asarray(accel_table, dtype=float)
         self.L, self.A = mu.shape
         A, D = self.A, 2 * self.A
@@ -92,8 +109,11 @@ class CycleRBPF:
         self.Q = np.asarray(Q, dtype=float)
         R = np.asarray(R, dtype=float)
         self.R = R * np.eye(A) if R.ndim == 0 else R
-        self.F = np.block([[np.eye(A), np.eye(A)], [np.zeros((A, A)), np.eye(A)]])
-        self.Bmu = np.concatenate([0.5 * mu, mu], axis=1)          # (L, D): B mu per cell
+        self.Bmu = np.concatenate([0.5 * mu, mu], axis=1)          # (L, D): input per unit s = r^2
+        self._d = np.zeros_like(mu) if velocity_table is None else np.asarray(velocity_table, dtype=float)
+        self.gap_rho = float(rho if gap_rho is None else gap_rho)
+        self._rho_measured = float(rho)
+        self.set_rho(rho)
         self.X = np.tile(np.asarray(x0, dtype=float), (self.L, 1))
         self.P = np.asarray(P0, dtype=float).copy()
         self.phase = np.asarray(phase, dtype=np.float32).copy()
@@ -114,6 +134,13 @@ class CycleRBPF:
         self.P_prior = self.P.copy()
         self.x_prior_mean = self.mean_x.copy()
 
+    def set_rho(self, rho: float):
+        """Use velocity decay ``rho`` from now on (the transition ``F`` and the velocity input)."""
+        A = self.A
+        self.rho = float(rho)
+        self.F = np.block([[np.eye(A), self.rho * np.eye(A)], [np.zeros((A, A)), self.rho * np.eye(A)]])
+        self.Gd = (1 - self.rho) * np.concatenate([self._d, self._d], axis=1)   # (L, D): input per unit r
+
     @property
     def n(self) -> int:
         return len(self.phase)
@@ -130,14 +157,17 @@ class CycleRBPF:
         Returns the posterior mean of ``[angles, velocities]`` (2A,).
         """
         A, L = self.A, self.L
+        want = self.gap_rho if z is None else self._rho_measured
+        if want != self.rho:
+            self.set_rho(want)
         cell = self._cell if self._cell is not None else self.cells()
-        s = self.speed * np.float32(L)
-        s *= s                                                        # (N,) acceleration scale 1/k^2
+        r = self.speed * np.float32(L)                                # (N,) speed relative to the reference
+        s = r * r                                                     # acceleration scale 1/k^2
         FX = self.X @ self.F.T                                        # (L, D)
         P_pred = self.F @ self.P @ self.F.T + self.Q
         self.P_prior = P_pred
         if z is None:
-            alpha, beta = FX, self.Bmu                               # prediction = alpha + s beta
+            alpha, beta, gamma = FX, self.Bmu, self.Gd               # prediction = alpha + s beta + r gamma
             lw = self.log_w
             w = np.exp(lw)
             self.P = P_pred
@@ -146,18 +176,30 @@ class CycleRBPF:
             S = P_pred[:A, :A] + self.R
             K = np.linalg.solve(S, P_pred[:A]).T                      # (D, A): P H^T S^-1
             W = np.linalg.inv(S)
-            # innovation of a particle: a[cell] - s b[cell]
+            # innovation of a particle: a[cell] - s b[cell] - r g[cell]
             a = z - FX[:, :A]
             a = np.where(self.circular, wrap(a), a)                   # z taken next to each cell's prediction
-            b = self.Bmu[:, :A]
-            aW = a @ W
-            tab = np.stack([-0.5 * np.einsum("ij,ij->i", aW, a), np.einsum("ij,ij->i", aW, b),
-                            -0.5 * np.einsum("ij,ij->i", b @ W, b)]).astype(np.float32)   # (3, L)
-            # log-likelihood -(aa - 2 s ab + s^2 bb) / 2, as t0 + s (t1 + s t2)
-            ll = np.take(tab[2], cell)
+            b, g = self.Bmu[:, :A], self.Gd[:, :A]
+            aW, bW = a @ W, b @ W
+
+            def dot(u, v):
+                return np.einsum("ij,ij->i", u, v)
+
+            # log-likelihood -|a - s b - r g|^2 / 2 = t0 + s (t1 + s t3 + r t4) + r (t2 + r t5)
+            tab = np.stack([-0.5 * dot(aW, a), dot(aW, b), dot(aW, g), -0.5 * dot(bW, b), -dot(bW, g),
+                            -0.5 * dot(g @ W, g)]).astype(np.float32)
+            ll = np.take(tab[3], cell)
             ll *= s
+            if self.rho != 1.0:
+                ll += r * np.take(tab[4], cell)
             ll += np.take(tab[1], cell)
             ll *= s
+            if self.rho != 1.0:
+                lr = np.take(tab[5], cell)
+                lr *= r
+                lr += np.take(tab[2], cell)
+                lr *= r
+                ll += lr
             ll += np.take(tab[0], cell)
             lw = ll
             lw += self.log_w
@@ -166,11 +208,12 @@ class CycleRBPF:
             total = w.sum(dtype=np.float64)
             w *= np.float32(1.0 / total)
             lw -= np.float32(np.log(total))
-            # posterior mean = prediction + K (a - s b): alpha + s beta
+            # posterior mean = prediction + K (a - s b - r g): alpha + s beta + r gamma
             IKH = np.eye(2 * A)
             IKH[:, :A] -= K                                           # I - K H with H = [I, 0]
             alpha = FX + a @ K.T
             beta = self.Bmu @ IKH.T
+            gamma = self.Gd @ IKH.T
             self.P = IKH @ P_pred
             self.P = 0.5 * (self.P + self.P.T)
         # every cell's angles next to one reference (the measurement, else the last estimate)
@@ -178,22 +221,20 @@ class CycleRBPF:
         alpha = alpha.copy()
         alpha[:, :A] = ref + np.where(self.circular, wrap(alpha[:, :A] - ref), alpha[:, :A] - ref)
         best = int(np.argmax(lw))
-        self.map_x = alpha[cell[best]] + float(s[best]) * beta[cell[best]]
+        cb = cell[best]
+        self.map_x = alpha[cb] + float(s[best]) * beta[cb] + float(r[best]) * gamma[cb]
         self.map_phase, self.map_speed = float(self.phase[best]), float(self.speed[best])
         self.ess = float(1.0 / np.einsum("i,i->", w, w, dtype=np.float64))
-        ws = w * s
         # resample (adaptively), then move the cycle state
         self.resampled = z is not None and self.ess < self.threshold * self.n
         if self.resampled:
             # the estimate from the weighted set, before resampling adds noise
-            W0 = np.bincount(cell, weights=w, minlength=L)
-            W1 = np.bincount(cell, weights=ws, minlength=L)
-            self.mean_x = (W0 @ alpha + W1 @ beta) / W0.sum()
+            W = [np.bincount(cell, weights=x, minlength=L) for x in (w, w * s, w * r)]
+            self.mean_x = (W[0] @ alpha + W[1] @ beta + W[2] @ gamma) / W[0].sum()
             idx = low_variance_resample(w, self.rng)
-            cell, s = cell[idx], s[idx]
+            cell, s, r = cell[idx], s[idx], r[idx]
             self.phase, self.speed = self.phase[idx], self.speed[idx]
             w = np.full(self.n, 1.0 / self.n, np.float32)
-            ws = w * s
             lw = np.full(self.n, -np.log(self.n), np.float32)
         self.log_w = lw
         self._move()
@@ -202,11 +243,14 @@ class CycleRBPF:
         key = new_cell * np.int32(L)
         key += cell
         M0 = np.bincount(key, weights=w, minlength=L * L).reshape(L, L)
-        M1 = np.bincount(key, weights=ws, minlength=L * L).reshape(L, L)
-        if not self.resampled:
-            self.mean_x = (M0.sum(axis=0) @ alpha + M1.sum(axis=0) @ beta) / M0.sum()
-        tot = M0.sum(axis=1)
+        M1 = np.bincount(key, weights=w * s, minlength=L * L).reshape(L, L)
         merged = M0 @ alpha + M1 @ beta
+        if self.rho != 1.0:
+            M2 = np.bincount(key, weights=w * r, minlength=L * L).reshape(L, L)
+            merged += M2 @ gamma
+        if not self.resampled:
+            self.mean_x = merged.sum(axis=0) / M0.sum()
+        tot = M0.sum(axis=1)
         live = tot > 0
         self.X[live] = merged[live] / tot[live, None]
         return self.mean_x

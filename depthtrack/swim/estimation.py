@@ -45,13 +45,15 @@ def tuned_runs(setup: SwimSetup, z, filters, particles, inits=("truth",), seed: 
     for init in inits:
         if "rbpf" in filters:
             for n in particles:
-                r = run_rbpf(model, window, z, n, setup.process_q, r_sigma, init, seed, progress=progress)
+                r = run_rbpf(model, window, z, n, setup.process_q, r_sigma, init, seed, progress=progress,
+                             gap_rho=setup.velocity_decay)
                 runs.append(_record("rbpf", init, n, r, window, r_sigma))
                 if log:
                     log(f"rbpf {init} N={n}: mean {runs[-1]['estimators']['mean']['error']:.4f} "
                         f"({r['seconds']:.1f} s)")
         if "ukf-tuned" in filters or "smoother" in filters:
-            r = run_ukf_tuned(model, window, z, setup.process_q, r_sigma, init, seed, smooth="smoother" in filters)
+            r = run_ukf_tuned(model, window, z, setup.process_q, r_sigma, init, seed, smooth="smoother" in filters,
+                              gap_rho=setup.velocity_decay)
             if "ukf-tuned" in filters:
                 runs.append(_record("ukf-tuned", init, None, r, window, r_sigma))
             if "smoother" in filters:
@@ -89,10 +91,11 @@ def gap_experiment(setup: SwimSetup, z, lengths, filters=("ukf", "rbpf", "ukf-tu
             r = run_ukf(model, window, zg, ukf_sigma, "truth", seed)
             methods["ukf"] = errors(r["estimates"]["mean"])
         if "rbpf" in filters and setup.process_q is not None:
-            r = run_rbpf(model, window, zg, particles, setup.process_q, r_sigma, "truth", seed)
+            r = run_rbpf(model, window, zg, particles, setup.process_q, r_sigma, "truth", seed,
+                         gap_rho=setup.velocity_decay)
             methods["rbpf"] = errors(r["estimates"]["mean"])
         if ("ukf-tuned" in filters or "smoother" in filters) and setup.process_q is not None:
-            r = run_ukf_tuned(model, window, zg, setup.process_q, r_sigma, "truth", seed)
+            r = run_ukf_tuned(model, window, zg, setup.process_q, r_sigma, "truth", seed, gap_rho=setup.velocity_decay)
             methods["ukf-tuned"] = errors(r["estimates"]["mean"])
             methods["smoother"] = errors(r["smoothed"]["estimates"]["mean"])
         cv = methods["constant_velocity"]["inside"]

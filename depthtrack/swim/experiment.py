@@ -285,6 +285,7 @@ class SwimSetup:
     units: str
     process_q: np.ndarray | None = None
     residual_count: int = 0
+    velocity_decay: float = 1.0
 
 
 def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int = 100,
@@ -324,7 +325,11 @@ def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int
     window = make_test_window(test, first, frames, step, test_starts)
     units_note = f"{train.units_m:.6g} m per BVH unit ({train.units_source})"
     own = [(s, e) for s, e, sd in training.sources if sd == side]
-    residuals = training_residuals(model, continue_angles(joints_to_angles(train.joints)), own, step)
+    train_angles = continue_angles(joints_to_angles(train.joints))
+    # filtering: the thesis's model (rho = 1), its noise from one-step residuals; gaps: the decay
+    # that predicts 1 to 30 frames ahead best on the training frames
+    _, residuals = training_residuals(model, train_angles, own, step, rho=1.0)
+    rho, _ = training_residuals(model, train_angles, own, step)
     q = process_noise_from_residuals(residuals) if len(residuals) else None
     return SwimSetup(model, window, training.sources, str(train_path), str(test_path), units_note, q,
-                     len(residuals))
+                     len(residuals), rho)

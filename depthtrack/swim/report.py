@@ -145,6 +145,7 @@ def run_evaluation(setup: SwimSetup, particles=(100, 1000, 10000, 100000, 100000
         "measurement_noise_estimate": estimate_measurement_noise(z),
         "process_noise": {"source": "second moment of the model's one-step residuals on the training frames",
                           "residual_frames": setup.residual_count,
+                          "velocity_decay": setup.velocity_decay,
                           "rms_angle": None if setup.process_q is None else
                           float(np.sqrt(np.trace(setup.process_q[:26, :26]) / 26)),
                           "rms_velocity": None if setup.process_q is None else

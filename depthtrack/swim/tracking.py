@@ -10,9 +10,9 @@ gaps); the filters then only predict with the motion model.
   state (progress, speed), a shared Kalman filter for the 52 angles and
   velocities (Doucet et al. 2000); estimates ``mean`` (posterior mean) and
   ``map`` (the best particle's Kalman mean).
-* ``ukf-tuned``: the thesis's UKF (same motion model and sigma points) with the
-  estimated ``Q`` and ``R`` instead of the per-phase training covariance and a
-  guessed sigma.
+* ``ukf-tuned``: the thesis's UKF (same motion model and sigma points, plus the
+  RBPF's fitted velocity decay) with the estimated ``Q`` and ``R`` instead of
+  the per-phase training covariance and a guessed sigma.
 * ``smoother``: the unscented RTS smoother (Särkkä 2008) over the tuned UKF,
   for offline use (it sees the whole window, including frames after a gap).
 """
@@ -49,7 +49,7 @@ def _initial(model: CyclicMotionModel, window: TestWindow, z, init: str, r_sigma
 
 
 def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, Q, r_sigma: float,
-             init: str = "truth", seed: int = 0, progress=None) -> dict:
+             init: str = "truth", seed: int = 0, progress=None, rho: float = 1.0, gap_rho=None) -> dict:
     """Track the window with :class:`CycleRBPF`.
 
     Parameters
@@ -60,6 +60,9 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
         Process noise of angles and velocities per frame.
     r_sigma : float
         Measurement noise per angle (rad).
+    rho, gap_rho : float
+        Velocity decay on measured and on withheld frames (:mod:`depthtrack.swim.tuning`; 1 = the
+        thesis's model; ``gap_rho`` defaults to ``rho``).
 
     Returns
     -------
@@ -77,7 +80,8 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
     phase -= np.floor(phase)
     f = CycleRBPF(model.mean_acceleration, Q, r_sigma ** 2, x0, P0, phase, speed,
                   temporal_sigma=model.temporal_sigma, circular=model.circular, rng=rng,
-                  min_speed=0.05 * model.v_ref)
+                  min_speed=0.05 * model.v_ref, velocity_table=model.mean_velocities, rho=rho,
+                  gap_rho=gap_rho)
     T = window.frames
     est = {"mean": np.empty((T, A)), "map": np.empty((T, A))}
     out_phase, out_speed, ess = np.empty(T), np.empty(T), np.empty(T)
@@ -96,8 +100,30 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
             "seconds": time.perf_counter() - start}
 
 
+def decaying_transition(model: CyclicMotionModel, rho: float):
+    """The thesis's transition (:meth:`CyclicMotionModel.transition`, mean acceleration interpolated in c)
+    with the RBPF's velocity decay: ``omega' = rho omega + (1 - rho) d(c) v L + a``, for sigma points
+    ``(K, 2A + 2)``."""
+    A, L = model.n_angles, model.length
+    if rho == 1.0:
+        return model.transition
+
+    def fx(x):
+        x = np.array(np.atleast_2d(x), dtype=float)
+        c, v = x[:, 2 * A], x[:, 2 * A + 1]
+        acc = model.interpolated_rows(model.mean_acceleration, c) * ((v * L) ** 2)[:, None]
+        vel = model.interpolated_rows(model.mean_velocities, c) * (v * L)[:, None]
+        drift = rho * x[:, A:2 * A] + (1 - rho) * vel
+        x[:, :A] += drift + 0.5 * acc
+        x[:, A:2 * A] = drift + acc
+        x[:, 2 * A] = c + v
+        return x
+
+    return fx
+
+
 def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: float, init: str = "truth",
-                  seed: int = 0, smooth: bool = True) -> dict:
+                  seed: int = 0, smooth: bool = True, rho: float = 1.0, gap_rho=None) -> dict:
     """The UKF with the estimated noise, and (``smooth``) the unscented RTS smoother over it.
 
     Returns
@@ -130,7 +156,9 @@ def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: f
     def mean_z(sig, wm):
         return sig[0] + np.tensordot(wm, wrap(sig - sig[0]), axes=(0, 0))
 
-    ukf = UnscentedKalmanFilter(x0, P0, model.transition, hx, Qfull, np.eye(A) * r_sigma ** 2,
+    fx_measured = decaying_transition(model, rho)
+    fx_gap = decaying_transition(model, rho if gap_rho is None else gap_rho)
+    ukf = UnscentedKalmanFilter(x0, P0, fx_measured, hx, Qfull, np.eye(A) * r_sigma ** 2,
                                 points=MerweScaledSigmaPoints(D, alpha=0.1, beta=2.0, kappa=0.0),
                                 residual_x=model.state_residual, residual_z=lambda a, b: wrap(a - b),
                                 mean_x=mean_x, mean_z=mean_z, align_z=nearest_equivalent)
@@ -140,9 +168,11 @@ def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: f
     xs[0], Ps[0] = ukf.x, ukf.P
     start = time.perf_counter()
     for t in range(1, T + 1):
+        measured = bool(np.all(np.isfinite(z[t])))
+        ukf.fx = fx_measured if measured else fx_gap
         ukf.predict()
         xp[t], Pp[t], Cs[t] = ukf.x_prior, ukf.P_prior, ukf.C
-        if np.all(np.isfinite(z[t])):
+        if measured:
             ukf.update(z[t])
         ukf.x[2 * A] %= 1.0
         ukf.x[2 * A + 1] = max(ukf.x[2 * A + 1], 0.05 * model.v_ref)

@@ -1,12 +1,15 @@
 """Noise levels estimated from data, not guessed: process noise from training frames, measurement noise from the measurements.
 
+* Velocity decay ``rho`` (:class:`depthtrack.filters.rbpf.CycleRBPF`): the value
+  on a grid in [0.5, 1] whose deterministic predictions 1 to 30 frames ahead
+  (the gap lengths of interest) fit the training frames best.
 * Process noise ``Q`` (2A x 2A) of ``[angles, velocities]`` per frame: the
   residuals of the motion model's one-step prediction on the training take's
   own frames (at the evaluation's frame step, phase and speed from the
   training cycle starts). Velocities are central differences of the angles;
-  the residual of frame t is ``x_{t+1} - F x_t - B mu(c_t) (v_t L)^2`` and
-  ``Q`` its second moment (bias included: the model's mean error is noise
-  to the filter too).
+  the residual of frame t is ``x_{t+1} - F x_t - u(c_t, v_t)`` and ``Q`` its
+  second moment (bias included: the model's mean error is noise to the
+  filter too).
 * Measurement noise ``sigma^2`` per angle: from the measurements alone, by
   the third difference. For white noise, ``Var(Delta^3 z) = 20 sigma^2``
   (binomial coefficients 1, 3, 3, 1 squared and summed); the swimmer's own
@@ -25,7 +28,61 @@ from .cycles import cycle_phase
 from .stickfigure import continue_angles
 
 
-def one_step_residuals(model: CyclicMotionModel, angles, starts, step: int = 1, first=None, last=None):
+def _training_frames(model: CyclicMotionModel, angles, starts, step: int):
+    """Angles, velocities (central differences), mean acceleration and mean velocity per filter frame
+    between the first and last cycle start: four (M, A) arrays (M may be 0)."""
+    angles = np.asarray(angles, dtype=float)
+    starts = np.asarray(starts, dtype=int)
+    idx = np.arange(starts[0], starts[-1], step)
+    A = model.n_angles
+    if len(idx) < 5:
+        return (np.zeros((0, A)),) * 4
+    phase, speed = cycle_phase(len(angles), starts)
+    c, v = phase[idx], speed[idx] * step
+    th = continue_angles(angles[idx], reference=model.interpolated(model.mean_angles, c[0]))
+    om = 0.5 * (th[2:] - th[:-2])
+    cell = model.index(c)[1:-1]
+    r = (v * model.length)[1:-1, None]
+    return th[1:-1], om, model.mean_acceleration[cell] * r ** 2, model.mean_velocities[cell] * r
+
+
+def predict_ahead(theta, omega, acc, vel, rho: float, horizon: int):
+    """Deterministic k-step predictions of the angles, k = 1 .. horizon, from every frame t, with the
+    mean acceleration and velocity of the true later frames (the cycle state known):
+    ``(horizon, M - horizon, A)`` predictions of ``theta[t + k]``."""
+    M = len(theta)
+    n = M - horizon
+    th, om = theta[:n].copy(), omega[:n].copy()
+    out = np.empty((horizon, n, theta.shape[1]))
+    for k in range(horizon):
+        a, d = acc[k:k + n], vel[k:k + n]
+        th = th + rho * om + (1 - rho) * d + 0.5 * a
+        om = rho * om + (1 - rho) * d + a
+        out[k] = th
+    return out
+
+
+def fit_velocity_decay(frames, horizon: int = 30, grid=np.linspace(0.5, 1.0, 51)) -> float:
+    """The ``rho`` of :class:`depthtrack.filters.rbpf.CycleRBPF` that predicts the training frames best
+    over 1 .. ``horizon`` frames ahead (mean squared wrapped angle error; ``frames`` a list of
+    :func:`_training_frames` tuples)."""
+    best, best_err = 1.0, np.inf
+    for rho in grid:
+        err = n = 0.0
+        for th, om, acc, vel in frames:
+            if len(th) <= horizon:
+                continue
+            pred = predict_ahead(th, om, acc, vel, rho, horizon)
+            truth = np.stack([th[k + 1:k + 1 + len(th) - horizon] for k in range(horizon)])
+            err += float((wrap(pred - truth) ** 2).sum())
+            n += pred.size
+        if n and err / n < best_err:
+            best, best_err = float(rho), err / n
+    return best
+
+
+def one_step_residuals(model: CyclicMotionModel, angles, starts, step: int = 1, first=None, last=None,
+                       rho: float = 1.0):
     """Residuals of the model's one-step prediction on real frames.
 
     Parameters
@@ -39,6 +96,9 @@ def one_step_residuals(model: CyclicMotionModel, angles, starts, step: int = 1, 
         Frame step of the filter (2: 60 Hz from 120 Hz mocap).
     first, last : int, optional
         Use only frames in ``[first, last]`` (the training range).
+
+    rho : float
+        Velocity decay of the model (1: the thesis's).
 
     Returns
     -------
@@ -59,27 +119,33 @@ def one_step_residuals(model: CyclicMotionModel, angles, starts, step: int = 1, 
     om[1:-1] = 0.5 * (th[2:] - th[:-2])
     cell = model.index(c)
     acc = model.mean_acceleration[cell] * model.acceleration_scale(v)[:, None]
+    vel = model.mean_velocities[cell] * (v * model.length)[:, None]
     t = np.arange(1, len(idx) - 2)
-    r_th = wrap(th[t + 1] - th[t] - om[t] - 0.5 * acc[t])
-    r_om = om[t + 1] - om[t] - acc[t]
+    drift = (1 - rho) * vel[t] + 0.5 * acc[t]
+    r_th = wrap(th[t + 1] - th[t] - rho * om[t] - drift)
+    r_om = om[t + 1] - rho * om[t] - (1 - rho) * vel[t] - acc[t]
     return np.concatenate([r_th, r_om], axis=1)
 
 
-def training_residuals(model: CyclicMotionModel, angles, cycles, step: int = 1):
-    """:func:`one_step_residuals` over the training cycles ``[(first, end), ...]``, run by contiguous run.
+def training_residuals(model: CyclicMotionModel, angles, cycles, step: int = 1, rho=None, horizon: int = 30):
+    """Velocity decay and one-step residuals over the training cycles ``[(first, end), ...]``, taken run
+    by contiguous run.
 
-    Returns (M, 2A) float.
+    ``rho`` None: fitted by :func:`fit_velocity_decay` (``horizon`` frames ahead).
+
+    Returns ``rho`` and the (M, 2A) residuals.
     """
     cycles = sorted((int(a), int(b)) for a, b in cycles)
-    runs, out = [], []
+    runs = []
     for a, b in cycles:
         if runs and runs[-1][-1] == a:
             runs[-1].append(b)
         else:
             runs.append([a, b])
-    for starts in runs:
-        out.append(one_step_residuals(model, angles, starts, step))
-    return np.concatenate(out) if out else np.zeros((0, 2 * model.n_angles))
+    if rho is None:
+        rho = fit_velocity_decay([_training_frames(model, angles, st, step) for st in runs], horizon)
+    out = [one_step_residuals(model, angles, st, step, rho=rho) for st in runs]
+    return rho, (np.concatenate(out) if out else np.zeros((0, 2 * model.n_angles)))
 
 
 def process_noise_from_residuals(residuals, floor: float = 1e-8):
