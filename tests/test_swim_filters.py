@@ -95,3 +95,20 @@ def test_measurement_noise_estimate_ignores_withheld_rows():
     z = np.sin(0.02 * t)[:, None] + 0.03 * rng.standard_normal((400, 6))
     z[100:130] = np.nan
     assert estimate_measurement_noise(z) == pytest.approx(0.03, rel=0.1)
+
+
+def test_velocity_decay_fit_recovers_the_decay_of_a_synthetic_deviation():
+    from depthtrack.swim.tuning import fit_velocity_decay, predict_ahead
+
+    rng = np.random.default_rng(6)
+    M, rho = 300, 0.8
+    vel = 0.05 * np.sin(np.arange(M) / 20.0)[:, None] * np.ones((1, 3))      # the mean stroke's velocity
+    acc = np.zeros((M, 3))
+    th, om = np.zeros((M, 3)), np.zeros((M, 3))
+    for t in range(M - 1):                      # the model, with a kick to the velocity now and then
+        drift = rho * om[t] + (1 - rho) * vel[t]
+        th[t + 1] = th[t] + drift
+        om[t + 1] = drift + (0.05 * rng.standard_normal(3) if t % 15 == 0 else 0.0)
+    assert fit_velocity_decay([(th, om, acc, vel)], horizon=10) == pytest.approx(rho, abs=0.03)
+    pred = predict_ahead(th, om, acc, vel, 1.0, 5)
+    assert pred.shape == (5, M - 5, 3)

@@ -315,4 +315,5 @@ def build_training_cycles(joints, fps: float, starts=None, length: int = 100, sm
 
 
 __all__ = ["ANGLE_NAMES", "STROKES", "TrainingCycles", "build_training_cycles", "cycle_phase",
-           "detect_cycle_starts", "periodic_cycle_starts", "stroke_period", "mirror_angles", "resample_cycles", "smooth_cycles", "upper_arm_zenith"]
+           "detect_cycle_starts", "periodic_cycle_starts", "stroke_period", "mirror_angles", "resample_cycles",
+           "smooth_cycles", "upper_arm_zenith"]

@@ -1,4 +1,5 @@
-"""Noise levels estimated from data, not guessed: process noise from training frames, measurement noise from the measurements.
+"""Noise levels estimated from data, not guessed: process noise from training frames, measurement noise
+from the measurements.
 
 * Velocity decay ``rho`` (:class:`depthtrack.filters.rbpf.CycleRBPF`): the value
   on a grid in [0.5, 1] whose deterministic predictions 1 to 30 frames ahead
