@@ -11,7 +11,7 @@ _EPILOG = """examples:
   depthtrack swim evaluate --train ../shared/data/cmu/126_01.bvh --test ../shared/data/cmu/126_01.bvh --report swim-report
   depthtrack swim evaluate --train T.bvh --test T.bvh --particles 1000000 --sigma 0.5 --estimator map \\
       --filter particle --init truth --json
-  depthtrack swim evaluate --train T.bvh --test T.bvh --filter rbpf,ukf-tuned,smoother --particles 100000 \
+  depthtrack swim evaluate --train T.bvh --test T.bvh --filter rbpf,ukf-tuned,smoother --particles 100000 \\
       --noise 0.1 --gaps 10,30
   depthtrack swim evaluate --train T.bvh --test T.bvh --test-start 566 --filter rbpf,ukf-tuned --particles 100000
   depthtrack swim train T.bvh -o model.json
@@ -53,6 +53,9 @@ def _common_training(p):
     p.add_argument("--cycle-starts", default=None,
                    help="manual cycle-start frames of the training take, comma-separated (overrides detection)")
     p.add_argument("--units", default=None, help="BVH units (metres per unit, or cmu/cm/m/inch); default inferred")
+    p.add_argument("--stroke", default="back", choices=("back", "freestyle", "breast", "butterfly", "auto"),
+                   help="stroke, for the cycle detection: back and freestyle by the upper arm pointing up, "
+                        "the others (and auto) by periodicity of the angles (default back)")
 
 
 def register(subparsers) -> None:
@@ -99,9 +102,7 @@ def register(subparsers) -> None:
     e.add_argument("--test-start", type=int, default=None, metavar="FRAME",
                    help="first frame of the test window in the test take (default: the latest cycle start "
                         "that leaves room); with the same take, training skips the cycles overlapping it")
-    e.add_argument("--stroke", default="back", choices=("back", "freestyle", "breast", "butterfly", "auto"),
-                   help="stroke, for the cycle detection: back and freestyle by the upper arm pointing up, "
-                        "the others (and auto) by periodicity (default back)")
+
     e.add_argument("--noise", type=float, default=0.05,
                    help="standard deviation (rad) of the noise added to the true angles to make the "
                         "measurements (default 0.05; 0 = the exact truth as in the thesis)")
@@ -202,7 +203,7 @@ def run_train(args) -> int:
     mocap = load_swim_mocap(args.bvh, args.units)
     starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
-                                     smooth_sigma=args.smooth, last_frame=args.last_frame)
+                                     smooth_sigma=args.smooth, last_frame=args.last_frame, stroke=args.stroke)
     model = train_motion_model(training, args.derivative)
     data = {"format": "depthtrack-swim-model/1", "source": str(args.bvh), "angle_names": list(ANGLE_NAMES),
             "cycles": [{"first_frame": s, "end_frame": e, "side": side} for s, e, side in training.sources],
@@ -221,7 +222,7 @@ def run_derivatives(args) -> int:
     mocap = load_swim_mocap(args.bvh, args.units)
     starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
-                                     smooth_sigma=args.smooth)
+                                     smooth_sigma=args.smooth, stroke=args.stroke)
     rows = compare_derivative_filters(training.cycles)
     if args.report:
         write_derivative_report(rows, args.report, len(training), args.length, args.smooth)
