@@ -146,9 +146,10 @@ class CycleRBPF:
         return len(self.phase)
 
     def cells(self, phase=None):
-        """(N,) int phase cell ``floor(c L)`` of each particle."""
+        """(N,) intp phase cell ``floor(c L)`` of each particle."""
         c = self.phase if phase is None else phase
-        idx = (c * np.float32(self.L)).astype(np.int32)
+        # intp, not int32: take and bincount convert other index types first (twice the time)
+        idx = (c * np.float32(self.L)).astype(np.intp)
         return np.minimum(idx, self.L - 1, out=idx)
 
     def step(self, z=None):
@@ -240,7 +241,7 @@ class CycleRBPF:
         self._move()
         new_cell = self._cell = self.cells()
         # collapse: weighted mean of the particles' Kalman means per new cell
-        key = new_cell * np.int32(L)
+        key = new_cell * L
         key += cell
         M0 = np.bincount(key, weights=w, minlength=L * L).reshape(L, L)
         M1 = np.bincount(key, weights=w * s, minlength=L * L).reshape(L, L)
