@@ -17,8 +17,7 @@ predictions through a gap follow the mean stroke's motion instead of
 extrapolating a velocity error (``rho`` is fitted on training frames,
 :mod:`depthtrack.swim.tuning`).
 
-Particles carry only ``s``; ``x`` is
-marginalised with a Kalman filter (Rao-Blackwellisation: Doucet et al. 2000,
+Particles carry only ``s``; ``x`` is marginalised with a Kalman filter (Rao-Blackwellisation: Doucet et al. 2000,
 "Rao-Blackwellised particle filtering for dynamic Bayesian networks", UAI;
 the weights are the Kalman predictive likelihoods ``N(z_t; H x_pred, S)``, which
 is what makes the proposal use the measurement's information on ``x`` exactly
@@ -33,21 +32,23 @@ Two choices make a million particles cheap (numpy, no compiled code):
   of the particles whose progress falls in the same cell (one of ``L``) are
   merged into one (their weighted average), as in GPB1/IMM merging of a
   switching Kalman filter (Blom & Bar-Shalom 1988). A particle's mean is
-  then ``X[cell]`` and its prediction ``F X[cell] + s B mu[cell]`` is affine in
-  the scalar ``s = (v L)^2``, so its log-likelihood is
-  ``-(|a|^2 - 2 s <a, b> + s^2 |b|^2) / 2`` in the ``S^-1`` norm with per-cell
-  ``a = z - H F X``, ``b = H B mu``: three table look-ups per particle and
-  no per-particle 52-vector. The merge is two ``bincount`` calls over
-  (new cell, old cell) pairs and an ``(L, L) @ (L, D)`` product.
+  then ``X[cell]`` and its prediction ``F X[cell] + s B mu[cell] + r G d[cell]``
+  is affine in the scalars ``r`` and ``s = r^2``, so its log-likelihood is a
+  quadratic in ``(s, r)`` whose coefficients are per-cell tables (from
+  ``a = z - H F X``, ``b = H B mu``, ``g = H G d`` in the ``S^-1`` norm): three
+  table look-ups per particle (six when ``rho < 1``) and no per-particle
+  52-vector. The merge is ``bincount`` calls over (new cell, old cell) pairs
+  and ``(L, L) @ (L, D)`` products.
 
 Without the collapse this is the exact RBPF; with it, the particles still carry
 the exact weights of their current step and the phase/speed posterior; the
-angles given the phase are the merged Kalman means. With ``mu = 0`` every cell
-holds the same mean and the filter reduces exactly to the Kalman filter
+angles given the phase are the merged Kalman means. With ``mu = d = 0`` every
+cell holds the same mean and the filter reduces exactly to the Kalman filter
 (tested).
 
 Measurements may be missing (``None``: occlusion): then the particles and the
-Kalman part only predict.
+Kalman part only predict, with ``gap_rho`` (a decay fitted for predicting many
+frames ahead may differ from the best one-step model).
 """
 from __future__ import annotations
 
