@@ -15,7 +15,8 @@ def _system(A=3, seed=0):
 
 
 def _F(A, rho=1.0):
-    return np.block([[np.eye(A), rho * np.eye(A)], [np.zeros((A, A)), rho * np.eye(A)]])
+    R = np.diag(np.broadcast_to(rho, (A,)))
+    return np.block([[np.eye(A), R], [np.zeros((A, A)), R]])
 
 
 def test_rbpf_without_a_mean_acceleration_is_the_kalman_filter():
@@ -23,11 +24,11 @@ def test_rbpf_without_a_mean_acceleration_is_the_kalman_filter():
     rng, Q, x0, P0 = _system(A)
     n = 500
     f = CycleRBPF(np.zeros((10, A)), Q, 0.05 ** 2, x0, P0, rng.random(n), np.full(n, 0.013),
-                  temporal_sigma=1e-3, rng=rng, velocity_table=np.zeros((10, A)), rho=0.8)
-    kf = KalmanFilter(x0, P0, _F(A, 0.8), np.eye(A, 2 * A), Q, 0.05 ** 2 * np.eye(A))
+                  temporal_sigma=1e-3, rng=rng, velocity_table=np.zeros((10, A)), rho=[0.8, 0.9, 1.0])
+    kf = KalmanFilter(x0, P0, _F(A, [0.8, 0.9, 1.0]), np.eye(A, 2 * A), Q, 0.05 ** 2 * np.eye(A))
     x = x0.copy()
     for t in range(25):
-        x = _F(A, 0.8) @ x + rng.multivariate_normal(np.zeros(2 * A), Q)
+        x = _F(A, [0.8, 0.9, 1.0]) @ x + rng.multivariate_normal(np.zeros(2 * A), Q)
         z = x[:A] + 0.05 * rng.normal(size=A) if t % 7 != 3 else None      # a withheld frame now and then
         kf.predict()
         if z is not None:

@@ -68,9 +68,9 @@ class CycleRBPF:
         Mean acceleration per reference sample^2 (``mu``).
     velocity_table : (L, A) float, optional
         Mean velocity per reference sample (``d``); needed when ``rho < 1``.
-    rho : float
+    rho : float or (A,) float
         Decay of the velocity's deviation from the mean stroke per frame (1: the thesis's model).
-    gap_rho : float, optional
+    gap_rho : float or (A,) float, optional
         The decay used on frames without a measurement (default ``rho``): a model fitted for
         predicting many frames ahead can differ from the best one-step model.
     Q : (2A, 2A) float
@@ -112,9 +112,9 @@ class CycleRBPF:
         self.R = R * np.eye(A) if R.ndim == 0 else R
         self.Bmu = np.concatenate([0.5 * mu, mu], axis=1)          # (L, D): input per unit s = r^2
         self._d = np.zeros_like(mu) if velocity_table is None else np.asarray(velocity_table, dtype=float)
-        self.gap_rho = float(rho if gap_rho is None else gap_rho)
-        self._rho_measured = float(rho)
-        self.set_rho(rho)
+        self.gap_rho = np.broadcast_to(np.asarray(rho if gap_rho is None else gap_rho, float), (A,)).copy()
+        self._rho_measured = np.broadcast_to(np.asarray(rho, float), (A,)).copy()
+        self.set_rho(self._rho_measured)
         self.X = np.tile(np.asarray(x0, dtype=float), (self.L, 1))
         self.P = np.asarray(P0, dtype=float).copy()
         self.phase = np.asarray(phase, dtype=np.float32).copy()
@@ -135,12 +135,14 @@ class CycleRBPF:
         self.P_prior = self.P.copy()
         self.x_prior_mean = self.mean_x.copy()
 
-    def set_rho(self, rho: float):
-        """Use velocity decay ``rho`` from now on (the transition ``F`` and the velocity input)."""
+    def set_rho(self, rho):
+        """Use velocity decay ``rho`` (scalar or (A,)) from now on (the transition ``F`` and the velocity input)."""
         A = self.A
-        self.rho = float(rho)
-        self.F = np.block([[np.eye(A), self.rho * np.eye(A)], [np.zeros((A, A)), self.rho * np.eye(A)]])
-        self.Gd = (1 - self.rho) * np.concatenate([self._d, self._d], axis=1)   # (L, D): input per unit r
+        self.rho = np.broadcast_to(np.asarray(rho, float), (A,)).copy()
+        R = np.diag(self.rho)
+        self.F = np.block([[np.eye(A), R], [np.zeros((A, A)), R]])
+        self._decays = bool(np.any(self.rho != 1.0))
+        self.Gd = np.tile(1 - self.rho, 2) * np.concatenate([self._d, self._d], axis=1)   # (L, D): per unit r
 
     @property
     def n(self) -> int:
@@ -160,7 +162,7 @@ class CycleRBPF:
         """
         A, L = self.A, self.L
         want = self.gap_rho if z is None else self._rho_measured
-        if want != self.rho:
+        if not np.array_equal(want, self.rho):
             self.set_rho(want)
         cell = self._cell if self._cell is not None else self.cells()
         r = self.speed * np.float32(L)                                # (N,) speed relative to the reference
@@ -192,11 +194,11 @@ class CycleRBPF:
                             -0.5 * dot(g @ W, g)]).astype(np.float32)
             ll = np.take(tab[3], cell)
             ll *= s
-            if self.rho != 1.0:
+            if self._decays:
                 ll += r * np.take(tab[4], cell)
             ll += np.take(tab[1], cell)
             ll *= s
-            if self.rho != 1.0:
+            if self._decays:
                 lr = np.take(tab[5], cell)
                 lr *= r
                 lr += np.take(tab[2], cell)
@@ -247,7 +249,7 @@ class CycleRBPF:
         M0 = np.bincount(key, weights=w, minlength=L * L).reshape(L, L)
         M1 = np.bincount(key, weights=w * s, minlength=L * L).reshape(L, L)
         merged = M0 @ alpha + M1 @ beta
-        if self.rho != 1.0:
+        if self._decays:
             M2 = np.bincount(key, weights=w * r, minlength=L * L).reshape(L, L)
             merged += M2 @ gamma
         if not self.resampled:

@@ -105,8 +105,9 @@ def decaying_transition(model: CyclicMotionModel, rho: float):
     with the RBPF's velocity decay: ``omega' = rho omega + (1 - rho) d(c) v L + a``, for sigma points
     ``(K, 2A + 2)``."""
     A, L = model.n_angles, model.length
-    if rho == 1.0:
+    if np.all(np.asarray(rho) == 1.0):
         return model.transition
+    rho = np.asarray(rho, dtype=float)
 
     def fx(x):
         x = np.array(np.atleast_2d(x), dtype=float)
