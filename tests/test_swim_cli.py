@@ -67,3 +67,27 @@ def test_derivatives_command_ranks_filters(shared_data, capsys):
     assert main(["swim", "derivatives", bvh, "--json"]) == 0
     rows = {r["name"]: r["error"] for r in json.loads(capsys.readouterr().out)}
     assert rows["D1 [1 -1]"] > 10 * max(rows["D2 1/2[1 0 -1]"], rows["Taylor r=2"], rows["Taylor r=3"])
+
+
+def test_new_filters_and_gaps_in_the_json(shared_data, capsys):
+    bvh = str(shared_data / "cmu" / "126_01.bvh")
+    code = main(["swim", "evaluate", "--train", bvh, "--test", bvh, "--filter", "rbpf,ukf-tuned,smoother",
+                 "--particles", "2000", "--frames", "60", "--init", "truth", "--gaps", "10", "--json",
+                 "--thesis-model-particles", "0", "--seed", "1"])
+    assert code == 0
+    metrics = json.loads(capsys.readouterr().out)
+    base = metrics["baseline_measurement"]["error"]
+    assert metrics["measurement_noise_estimate"] == pytest.approx(0.05, rel=0.2)
+    assert metrics["process_noise"]["residual_frames"] > 100
+    runs = {r["filter"]: r for r in metrics["runs"]}
+    assert set(runs) == {"rbpf", "ukf-tuned", "smoother"}
+    # measured on this window: rbpf ~0.03, ukf-tuned ~0.03, smoother ~0.015 against 0.065
+    for name in runs:
+        assert runs[name]["estimators"]["mean"]["error"] < 0.75 * base, name
+    (gaps,) = metrics["gaps"]
+    assert gaps["length"] == 10 and gaps["gaps"][0] == [20, 30]
+    methods = gaps["methods"]
+    assert {"hold", "constant_velocity", "interpolation", "rbpf", "ukf-tuned", "smoother"} <= set(methods)
+    assert all(len(m["inside_per_phase"]) == 4 for m in methods.values())
+    # after a gap the filters pick up again: back below the measurements' own error
+    assert methods["rbpf"]["after"] < base and methods["ukf-tuned"]["after"] < base

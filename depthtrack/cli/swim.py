@@ -12,6 +12,9 @@ _EPILOG = """examples:
   depthtrack swim evaluate --train ../shared/data/cmu/126_01.bvh --test ../shared/data/cmu/126_01.bvh --report swim-report
   depthtrack swim evaluate --train T.bvh --test T.bvh --particles 1000000 --sigma 0.5 --estimator map \\
       --filter particle --init truth --json
+  depthtrack swim evaluate --train T.bvh --test T.bvh --filter rbpf,ukf-tuned,smoother --particles 100000 \\
+      --noise 0.1 --gaps 10,30
+  depthtrack swim evaluate --train T.bvh --test T.bvh --test-start 566 --filter rbpf,ukf-tuned --particles 100000
   depthtrack swim train T.bvh -o model.json
   depthtrack swim derivatives T.bvh --report deriv
   depthtrack swim reconstruct markings.csv --lengths lengths.json -o joints.csv"""
@@ -44,10 +47,11 @@ def _starts(text):
     return [int(v) for v in values]
 
 
-def _choices(text, allowed, what):
+def _choices(text, allowed, what, both=None):
+    """Comma-separated choices; ``both`` (documented for two-way options) means ``both``'s pair."""
     values = [x.strip() for x in str(text).split(",") if x.strip()]
     if values == ["both"]:                          # documented: "map, kmeans or both"
-        values = list(allowed)
+        values = list(both or allowed)
     bad = [v for v in values if v not in allowed]
     if bad or not values:
         raise InputError(None, f"unknown {what} {', '.join(bad) or repr(text)} (choose from {', '.join(allowed)})")
@@ -68,6 +72,9 @@ def _common_training(p):
     p.add_argument("--cycle-starts", default=None,
                    help="manual cycle-start frames of the training take, comma-separated (overrides detection)")
     p.add_argument("--units", default=None, help="BVH units (metres per unit, or cmu/cm/m/inch); default inferred")
+    p.add_argument("--stroke", default="back", choices=("back", "freestyle", "breast", "butterfly", "auto"),
+                   help="stroke, for the cycle detection: back and freestyle by the upper arm pointing up, "
+                        "the others (and auto) by periodicity of the angles (default back)")
 
 
 def register(subparsers) -> None:
@@ -101,7 +108,20 @@ def register(subparsers) -> None:
                    help="use every STEP-th frame of the test take (default 2: 60 Hz from 120 Hz mocap)")
     e.add_argument("--estimator", default="map,kmeans", help="map, kmeans or both (default both)")
     e.add_argument("--init", default="truth,random", help="truth, random or both (default both)")
-    e.add_argument("--filter", default="particle,ukf", help="particle, ukf or both (default both)")
+    e.add_argument("--filter", default="particle,ukf",
+                   help="comma-separated: particle and ukf (the thesis's, with the --sigma grid), rbpf (the "
+                        "Rao-Blackwellised particle filter on the cycle state, for each --particles count), "
+                        "ukf-tuned (the UKF with noise estimated from the training frames and the measurements), "
+                        "smoother (its RTS smoother, offline); default particle,ukf")
+    e.add_argument("--gaps", default=None, metavar="K,...",
+                   help="also withhold the measurements for stretches of K frames (every K + 40 frames from "
+                        "test frame 20) and report the errors inside and after the gaps, per stroke phase, "
+                        "against holding the last measurement, constant-velocity extrapolation and linear "
+                        "interpolation (e.g. 10,30)")
+    e.add_argument("--test-start", type=integer(0, 10**9), default=None, metavar="FRAME",
+                   help="first frame of the test window in the test take (default: the latest cycle start "
+                        "that leaves room); with the same take, training skips the cycles overlapping it")
+
     e.add_argument("--noise", type=number(0, 10), default=0.05,
                    help="standard deviation (rad) of the noise added to the true angles to make the "
                         "measurements (default 0.05; 0 = the exact truth as in the thesis)")
@@ -178,19 +198,21 @@ def run_evaluate(args) -> int:
     random_sigmas = _floats(args.random_sigma, "--random-sigma")
     estimators = _choices(args.estimator, ("map", "kmeans"), "estimator")
     inits = _choices(args.init, ("truth", "random"), "initialisation")
-    filters = _choices(args.filter, ("particle", "ukf"), "filter")
+    filters = _choices(args.filter, ("particle", "ukf", "rbpf", "ukf-tuned", "smoother"), "filter",
+                       both=("particle", "ukf"))
+    gaps = _ints(args.gaps, "--gaps") if args.gaps else ()
     if any(not (0 < s <= 100) for s in sigmas + random_sigmas):
         raise InputError(None, "--sigma and --random-sigma must be in (0, 100] rad")
     starts = _starts(args.cycle_starts) if args.cycle_starts else None
     _check_out(args, "report", [args.train, args.test], "dir", "swim evaluate")
     setup = prepare(args.train, args.test, frames=args.frames, step=args.step, length=args.length,
                     smooth_sigma=args.smooth, derivative=args.derivative, temporal_sigma=args.temporal_sigma,
-                    train_starts=starts, units=args.units)
+                    train_starts=starts, units=args.units, test_start=args.test_start, stroke=args.stroke)
     setup.model.jitter = args.jitter
     log = None if (args.quiet or args.json) else (lambda text: print(text, file=sys.stderr))
     metrics, snapshot = run_evaluation(setup, particles, sigmas, estimators, inits, filters, random_sigmas,
                                        noise=args.noise, seed=args.seed, threads=args.threads, log=log,
-                                       thesis_particles=args.thesis_model_particles)
+                                       thesis_particles=args.thesis_model_particles, gaps=gaps)
     if args.report:
         write_report(metrics, args.report, setup, snapshot)
     if args.json:
@@ -211,7 +233,7 @@ def run_train(args) -> int:
     _check_out(args, "output", [args.bvh], "file", "swim train")
     mocap = load_swim_mocap(args.bvh, args.units)
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
-                                     smooth_sigma=args.smooth, last_frame=args.last_frame)
+                                     smooth_sigma=args.smooth, last_frame=args.last_frame, stroke=args.stroke)
     model = train_motion_model(training, args.derivative)
     data = {"format": "depthtrack-swim-model/1", "source": str(args.bvh), "angle_names": list(ANGLE_NAMES),
             "cycles": [{"first_frame": s, "end_frame": e, "side": side} for s, e, side in training.sources],
@@ -231,7 +253,7 @@ def run_derivatives(args) -> int:
     _check_out(args, "report", [args.bvh], "dir", "swim derivatives")
     mocap = load_swim_mocap(args.bvh, args.units)
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
-                                     smooth_sigma=args.smooth)
+                                     smooth_sigma=args.smooth, stroke=args.stroke)
     rows = compare_derivative_filters(training.cycles)
     if args.report:
         write_derivative_report(rows, args.report, len(training), args.length, args.smooth)

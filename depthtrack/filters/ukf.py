@@ -86,6 +86,8 @@ class UnscentedKalmanFilter:
     Attributes
     ----------
     x, P : posterior; ``x_prior``, ``P_prior`` after :meth:`predict`; ``S``, ``K``, ``y`` of the last update.
+    C : (n, n) cross-covariance of the state before and after the last :meth:`predict`
+        (what :func:`depthtrack.filters.smoother.rts_smooth` needs).
     """
 
     def __init__(self, x, P, fx, hx, Q, R, points=None, residual_x=None, residual_z=None,
@@ -101,16 +103,22 @@ class UnscentedKalmanFilter:
         self.x_prior, self.P_prior = self.x.copy(), self.P.copy()
         self.sigmas_f = None
         self.S = self.K = self.y = None
+        self.C = None
 
     def _add_x(self, x, dx):
         return x + dx
 
     def predict(self):
         Q = self.Q(self.x) if callable(self.Q) else self.Q
+        x_before = self.x
         sig = self.points.sigma_points(self.x, self.P, self._add_x)
         self.sigmas_f = self.fx(sig)
         self.x, self.P = unscented_transform(self.sigmas_f, self.points.Wm, self.points.Wc, Q,
                                              self.mean_x, self.residual_x)
+        # Cross-covariance of the previous and the predicted state, for the unscented RTS smoother.
+        d0 = self.residual_x(sig, x_before)
+        d1 = self.residual_x(self.sigmas_f, self.x)
+        self.C = (d0 * self.points.Wc[:, None]).T @ d1
         self.x_prior, self.P_prior = self.x.copy(), self.P.copy()
         return self.x
 

@@ -155,6 +155,13 @@ class CyclicMotionModel:
         w = u - np.floor(u)
         return (1 - w) * table[i] + w * table[(i + 1) % self.length]
 
+    def interpolated_rows(self, table, phase):
+        """Periodic linear interpolation of ``table (L, A)`` at every ``phase (K,)`` -> ``(K, A)``."""
+        u = np.mod(np.asarray(phase, dtype=float), 1.0) * self.length
+        i = np.floor(u).astype(int) % self.length
+        w = (u - np.floor(u))[:, None]
+        return (1 - w) * table[i] + w * table[(i + 1) % self.length]
+
     # ------------------------------------------------------------ particles
     def propagate(self, particles: dict, rng: np.random.Generator, threads: int | None = None,
                   ancestors=None, out: dict | None = None, score=None):

@@ -4,7 +4,10 @@ A cycle starts at the stroke's distinctive pose (thesis Figure 2.6). For back
 stroke and freestyle that is the upper arm pointing straight up out of the
 water: the zenith angle of the shoulder->elbow segment reaches a local minimum
 near zero. :func:`detect_cycle_starts` finds those minima; a manual list of
-start frames overrides it (the only way for breast stroke and butterfly here).
+start frames overrides it. For breast stroke, butterfly or any other periodic
+motion (``stroke="auto"``) nothing about the stroke is assumed: the period comes
+from the autocorrelation of the whole angle vector and the cycles start at the
+returns to one distinctive (extreme) pose (:func:`periodic_cycle_starts`).
 
 Each angle of each cycle is resampled to ``length`` samples with a cubic spline
 through the frames (thesis 2.7). The spline runs over the whole continuous
@@ -32,7 +35,10 @@ def upper_arm_zenith(joints, side: str = "right"):
 
 def detect_cycle_starts(joints, fps: float, stroke: str = "back", side: str = "right",
                         max_zenith_deg: float = 45.0, min_period_s: float = 0.8):
-    """Frames where the upper arm points straight up (back stroke, freestyle).
+    """Cycle starts: where the upper arm points straight up (back stroke, freestyle), else by periodicity.
+
+    Breast stroke, butterfly and ``auto`` (any periodic motion) use
+    :func:`periodic_cycle_starts`, which assumes nothing about the stroke.
 
     Parameters
     ----------
@@ -40,7 +46,7 @@ def detect_cycle_starts(joints, fps: float, stroke: str = "back", side: str = "r
         Pool frame, y up.
     fps : float
     stroke : str
-        ``back`` or ``freestyle``; the symmetric strokes need a manual list.
+        ``back``, ``freestyle`` (distinctive pose), ``breast``, ``butterfly`` or ``auto`` (periodicity).
     side : str
         Arm whose up-pose starts a cycle.
     max_zenith_deg : float
@@ -52,12 +58,79 @@ def detect_cycle_starts(joints, fps: float, stroke: str = "back", side: str = "r
     -------
     (K,) int, increasing.
     """
+    if stroke not in STROKES + ("auto",):
+        raise InputError(None, f"unknown stroke {stroke!r} (choose from {', '.join(STROKES + ('auto',))})")
     if stroke not in ("back", "freestyle"):
-        raise InputError(None, f"automatic cycle detection knows back stroke and freestyle, not {stroke!r}: "
-                               "give the cycle-start frames")
+        return periodic_cycle_starts(joints_to_angles(joints), fps, min_period_s=min_period_s)
     zenith = upper_arm_zenith(joints, side)
     distance = max(1, int(round(min_period_s * fps)))
     peaks, _ = signal.find_peaks(-zenith, height=-np.radians(max_zenith_deg), distance=distance)
+    return peaks.astype(int)
+
+
+def stroke_period(angles, fps: float, min_period_s: float = 0.8, max_period_s: float = 5.0):
+    """Cycle length in frames of a periodic angle trajectory, by autocorrelation.
+
+    The angles ``(F, A)`` are embedded as ``(cos, sin)`` (so wrapping does not
+    matter), centred, and the autocorrelation of the whole vector,
+    ``r(tau) = sum_t <x_t, x_{t+tau}> / sum_t |x_t|^2`` (FFT, normalised by the
+    overlap), is searched for peaks between the period bounds; the period is the
+    first peak within 90 % of the highest one (so a multiple of the period does
+    not win by noise).
+
+    Returns
+    -------
+    period : int (frames), strength : float (r at the period, 1 = perfectly periodic)
+    """
+    a = np.asarray(angles, dtype=float)
+    x = np.concatenate([np.cos(a), np.sin(a)], axis=1)
+    x = x - x.mean(axis=0)
+    n = len(x)
+    lo = max(1, int(round(min_period_s * fps)))
+    hi = min(n - 2, int(round(max_period_s * fps)))
+    if hi <= lo + 1:
+        raise InputError(None, f"{n} frames are too few to find a cycle of at least {min_period_s} s")
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    spec = np.fft.rfft(x, size, axis=0)
+    r = np.fft.irfft((spec * spec.conj()).real.sum(axis=1), size)[:n]
+    r = r / (n - np.arange(n)) / (r[0] / n)
+    peaks, _ = signal.find_peaks(r[lo:hi + 1])
+    if len(peaks) == 0:
+        raise InputError(None, "no periodic motion found (no autocorrelation peak between "
+                               f"{min_period_s} and {max_period_s} s)")
+    peaks = peaks + lo
+    best = r[peaks].max()
+    period = int(peaks[np.flatnonzero(r[peaks] >= 0.9 * best)[0]])
+    return period, float(r[period])
+
+
+def periodic_cycle_starts(angles, fps: float, min_period_s: float = 0.8, max_period_s: float = 5.0):
+    """Cycle starts of any periodic motion (no stroke assumed): the returns to one distinctive pose.
+
+    The period P comes from :func:`stroke_period`. The distinctive pose is the
+    frame, among the middle period of the take, farthest from the take's mean pose
+    (an extreme of the stroke: returns to it are sharp minima of the distance);
+    the starts are the local minima of the distance to it at least 0.6 P apart
+    and closer than the median distance (frames where the swimmer does something
+    else do not count).
+
+    Parameters
+    ----------
+    angles : (F, A) float
+    fps : float
+
+    Returns
+    -------
+    (K,) int, increasing.
+    """
+    a = np.asarray(angles, dtype=float)
+    period, _ = stroke_period(a, fps, min_period_s, max_period_s)
+    x = np.concatenate([np.cos(a), np.sin(a)], axis=1)
+    mid = len(x) // 2
+    span = np.arange(max(0, mid - period // 2), min(len(x), mid + period // 2 + 1))
+    far = span[np.argmax(np.sum((x[span] - x.mean(axis=0)) ** 2, axis=1))]
+    d = np.sum((x - x[far]) ** 2, axis=1)
+    peaks, _ = signal.find_peaks(-d, distance=max(1, int(0.6 * period)), height=-np.median(d))
     return peaks.astype(int)
 
 
@@ -181,7 +254,7 @@ class TrainingCycles:
 
 def build_training_cycles(joints, fps: float, starts=None, length: int = 100, smooth_sigma: float = 2.0,
                           stroke: str = "back", side: str = "right", use_other_side: bool = True,
-                          last_frame: int | None = None, margin: int = 12, starts_other=None):
+                          last_frame: int | None = None, margin: int = 12, starts_other=None, exclude=None):
     """Training cycles from a take (thesis 2.7), with the half-cycle symmetry as extra cycles.
 
     Parameters
@@ -204,6 +277,8 @@ def build_training_cycles(joints, fps: float, starts=None, length: int = 100, sm
         Context samples kept each side.
     starts_other : (K,) int, optional
         Manual starts for the other side.
+    exclude : (int, int), optional
+        Frames ``[first, stop)`` no training cycle may overlap (a test window).
 
     Returns
     -------
@@ -226,15 +301,15 @@ def build_training_cycles(joints, fps: float, starts=None, length: int = 100, sm
         sets.append((np.asarray(starts_other, int), mirrored, other))
     extended, sources = [], []
     for st, ang, sd in sets:
+        pairs = [(int(s), int(e)) for s, e in zip(st[:-1], st[1:])]
         if last_frame is not None:
-            keep = st <= last_frame
-            st = st[keep]
-        if len(st) < 2:
-            continue
-        cyc = resample_cycles(ang, st, length, margin)
-        cyc = smooth_cycles(cyc, smooth_sigma)
-        extended.extend(cyc)
-        sources.extend((int(s), int(e), sd) for s, e in zip(st[:-1], st[1:]))
+            pairs = [(s, e) for s, e in pairs if e <= last_frame]
+        if exclude is not None:
+            pairs = [(s, e) for s, e in pairs if e <= exclude[0] or s >= exclude[1]]
+        for s, e in pairs:
+            cyc = smooth_cycles(resample_cycles(ang, [s, e], length, margin), smooth_sigma)
+            extended.extend(cyc)
+            sources.append((s, e, sd))
     if not extended:
         raise InputError(None, "no complete stroke cycle found for training")
     # Each cycle keeps its own continuous representation; the motion model maps them
@@ -243,4 +318,5 @@ def build_training_cycles(joints, fps: float, starts=None, length: int = 100, sm
 
 
 __all__ = ["ANGLE_NAMES", "STROKES", "TrainingCycles", "build_training_cycles", "cycle_phase",
-           "detect_cycle_starts", "mirror_angles", "resample_cycles", "smooth_cycles", "upper_arm_zenith"]
+           "detect_cycle_starts", "periodic_cycle_starts", "stroke_period", "mirror_angles", "resample_cycles",
+           "smooth_cycles", "upper_arm_zenith"]

@@ -88,7 +88,8 @@ def _extrapolated_phase(n_frames, starts):
     return phase, speed
 
 
-def plan_split(train: SwimMocap, test: SwimMocap, frames: int, step: int, side: str = "right"):
+def plan_split(train: SwimMocap, test: SwimMocap, frames: int, step: int, side: str = "right",
+               stroke: str = "back"):
     """Choose the training range and the test window.
 
     Returns ``(last_train_frame, test_first_frame, test_starts)``. With the same take
@@ -96,7 +97,7 @@ def plan_split(train: SwimMocap, test: SwimMocap, frames: int, step: int, side: 
     for ``frames * step`` frames, and training uses only cycles ending at or before it.
     """
     span = frames * step
-    test_starts = detect_cycle_starts(test.joints, test.fps, "back", side)
+    test_starts = detect_cycle_starts(test.joints, test.fps, stroke, side)
     same = train.path is not None and test.path is not None and \
         Path(train.path).resolve() == Path(test.path).resolve()
     if same:
@@ -262,7 +263,8 @@ def run_ukf(model: CyclicMotionModel, window: TestWindow, z, sigma: float, init:
     start = time.perf_counter()
     for t in range(1, T + 1):
         ukf.predict()
-        ukf.update(z[t])
+        if np.all(np.isfinite(z[t])):        # withheld frames (NaN): predict only
+            ukf.update(z[t])
         ukf.x[2 * A] %= 1.0
         ukf.x[2 * A + 1] = max(ukf.x[2 * A + 1], 0.05 * model.v_ref)
         est[t - 1] = ukf.x[:A]
@@ -281,24 +283,53 @@ class SwimSetup:
     train_path: str
     test_path: str
     units: str
+    process_q: np.ndarray | None = None
+    residual_count: int = 0
+    velocity_decay: float = 1.0
 
 
 def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int = 100,
             smooth_sigma: float = 2.0, derivative: str = "taylor3", temporal_sigma=None,
-            train_starts=None, side: str = "right", units=None) -> SwimSetup:
-    """Load the takes, split, train the model and cut the test window."""
+            train_starts=None, side: str = "right", units=None, test_start: int | None = None,
+            stroke: str = "back") -> SwimSetup:
+    """Load the takes, split, train the model, estimate its process noise and cut the test window.
+
+    ``test_start`` (a frame of the test take) places the test window there; with the
+    same take for both, training then uses only the cycles that do not overlap it.
+    """
+    from .tuning import process_noise_from_residuals, training_residuals
+
     if frames < 1 or step < 1:
         raise InputError(None, "--frames and --step must be positive")
     train = load_swim_mocap(train_path, units)
     same = Path(test_path).resolve() == Path(train_path).resolve()
     test = train if same else load_swim_mocap(test_path, units)
-    last_train, first, test_starts = plan_split(train, test, frames, step, side)
+    exclude = None
+    if test_start is None:
+        last_train, first, test_starts = plan_split(train, test, frames, step, side, stroke)
+    else:
+        if test_start < 0 or test_start + frames * step > len(test) - 1:
+            raise InputError(test_path, f"--test-start {test_start}: the take has {len(test)} frames, "
+                                        f"{frames} test frames at step {step} do not fit")
+        last_train, first = None, int(test_start)
+        test_starts = detect_cycle_starts(test.joints, test.fps, stroke, side)
+        if same:
+            exclude = (first, first + frames * step)
     training = build_training_cycles(train.joints, train.fps, starts=train_starts, length=length,
-                                     smooth_sigma=smooth_sigma, side=side, last_frame=last_train)
+                                     smooth_sigma=smooth_sigma, side=side, last_frame=last_train,
+                                     exclude=exclude, stroke=stroke)
     if len(training) < 2:
-        raise InputError(train_path, f"only {len(training)} complete training cycle(s) before the test window; "
+        raise InputError(train_path, f"only {len(training)} complete training cycle(s) outside the test window; "
                                      "need at least 2")
     model = train_motion_model(training, derivative, temporal_sigma=temporal_sigma)
     window = make_test_window(test, first, frames, step, test_starts)
     units_note = f"{train.units_m:.6g} m per BVH unit ({train.units_source})"
-    return SwimSetup(model, window, training.sources, str(train_path), str(test_path), units_note)
+    own = [(s, e) for s, e, sd in training.sources if sd == side]
+    train_angles = continue_angles(joints_to_angles(train.joints))
+    # filtering: the thesis's model (rho = 1), its noise from one-step residuals; gaps: the decay
+    # that predicts 1 to 30 frames ahead best on the training frames
+    _, residuals = training_residuals(model, train_angles, own, step, rho=1.0)
+    rho, _ = training_residuals(model, train_angles, own, step)
+    q = process_noise_from_residuals(residuals) if len(residuals) else None
+    return SwimSetup(model, window, training.sources, str(train_path), str(test_path), units_note, q,
+                     len(residuals), rho)

@@ -7,7 +7,9 @@ Experiments (thesis 7.3.2; figure numbers refer to the thesis):
 * ``random``: random initialisation, error against particles at sigma 0.1
   (Figure 7.12) and, with the most particles, against larger sigmas (Figure 7.13);
 * ``ukf``: the unscented Kalman filter with the same motion model (thesis 8.2);
-* ``baseline``: the measurements themselves used as the estimate.
+* ``baseline``: the measurements themselves used as the estimate;
+* ``tuned`` and ``gaps``: the filters with estimated noise and the occlusion
+  gaps (:mod:`depthtrack.swim.estimation`).
 """
 from __future__ import annotations
 
@@ -18,7 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from ..io.atomic import atomic_path
+from .estimation import NEW_FILTERS, gap_experiment, markdown_new, tuned_runs
 from .experiment import (SwimSetup, frame_errors, measurements, run_particle_filter, run_ukf, summarise)
+from .tuning import estimate_measurement_noise
 
 
 def _run_record(kind, filter_name, init, sigma, n_particles, result, window, estimators):
@@ -40,7 +44,8 @@ def _run_record(kind, filter_name, init, sigma, n_particles, result, window, est
 def run_evaluation(setup: SwimSetup, particles=(100, 1000, 10000, 100000, 1000000), sigmas=(0.05, 0.1, 0.5, 1.0),
                    estimators=("map", "kmeans"), inits=("truth", "random"), filters=("particle", "ukf"),
                    random_sigmas=(0.5, 1.0, 2.0), random_sigma=0.1, noise: float = 0.05, seed: int = 0,
-                   threads: int = 1, progress=None, log=None, thesis_particles: int = 100000):
+                   threads: int = 1, progress=None, log=None, thesis_particles: int = 100000, gaps=(),
+                   rbpf_particles=None, gap_particles: int = 100000):
     """Run the grid of experiments.
 
     Returns
@@ -115,6 +120,15 @@ def run_evaluation(setup: SwimSetup, particles=(100, 1000, 10000, 100000, 100000
                     snapshot = r["estimates"]["mean"]
                 runs.append(_run_record("ukf", "ukf", init, sigma, None, r, window, None))
                 say(f"ukf {init} sigma={sigma}: {runs[-1]['estimators']['mean']['error']:.3f}")
+    # the filters with estimated noise (Rao-Blackwellised PF, tuned UKF, smoother), then the gaps
+    new = tuple(f for f in filters if f in NEW_FILTERS)
+    if new:
+        runs.extend(tuned_runs(setup, z, new, rbpf_particles or particles, inits, seed, log=say, progress=progress))
+    gap_results = []
+    if gaps:
+        gap_filters = tuple(f for f in filters if f != "particle") or ("ukf-tuned",)
+        gap_results = gap_experiment(setup, z, gaps, gap_filters, min(gap_particles, max(rbpf_particles or particles)),
+                                     seed=seed, log=say)
     for rec in runs:
         rec["estimators"] = {k: v for k, v in rec["estimators"].items()}
     metrics = {
@@ -128,7 +142,16 @@ def run_evaluation(setup: SwimSetup, particles=(100, 1000, 10000, 100000, 100000
         "measurement_noise": noise, "seed": seed,
         "error_unit": "rad^2 per frame: squared angle error summed over the 26 angles, mean over frames",
         "baseline_measurement": baseline,
+        "measurement_noise_estimate": estimate_measurement_noise(z),
+        "process_noise": {"source": "second moment of the model's one-step residuals on the training frames",
+                          "residual_frames": setup.residual_count,
+                          "velocity_decay": setup.velocity_decay,
+                          "rms_angle": None if setup.process_q is None else
+                          float(np.sqrt(np.trace(setup.process_q[:26, :26]) / 26)),
+                          "rms_velocity": None if setup.process_q is None else
+                          float(np.sqrt(np.trace(setup.process_q[26:, 26:]) / 26))},
         "runs": runs,
+        "gaps": gap_results,
         "seconds": round(time.perf_counter() - started, 2),
     }
     return metrics, snapshot
@@ -197,7 +220,7 @@ def markdown_tables(metrics: dict) -> str:
             e = r["estimators"]["mean"]
             out.append(f"| {r['init']} | {r['sigma']} | {_fmt(e['error'])} | {_fmt(e['rms_deg'], 1)} | "
                        f"{_fmt(e['joint_error_cm'], 1)} | {_fmt(r['seconds'], 2)} |")
-    return "\n".join(out) + "\n"
+    return "\n".join(out) + "\n" + markdown_new(metrics)
 
 
 # --------------------------------------------------------------------------- plots

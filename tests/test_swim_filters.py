@@ -1,0 +1,114 @@
+"""The filters with estimated noise on a short synthetic stroke: they beat the measurements, the noise
+estimates are right, and the gap baselines behave as their closed forms on a sinusoid."""
+import numpy as np
+import pytest
+
+from depthtrack.motion.cyclic import CyclicMotionModel
+from depthtrack.swim.experiment import TestWindow as Window
+from depthtrack.swim.gaps import gap_baselines, gap_errors, gap_mask, gap_runs, withhold
+from depthtrack.swim.stickfigure import angle_error_sq
+from depthtrack.swim.tracking import run_rbpf, run_ukf_tuned
+from depthtrack.swim.tuning import estimate_measurement_noise
+
+A, L = 26, 100
+
+
+def _pose(c, k):
+    """Smooth periodic angles; thetas (even) stay in (0.6, 2.4), away from the poles."""
+    c = np.asarray(c, float)[..., None]
+    base = np.where(np.arange(A) % 2 == 0, 1.5, 0.3)
+    amp = 0.25 + 0.02 * np.arange(A) % 0.3
+    return base + amp * np.sin(2 * np.pi * c + 0.3 * np.arange(A) + 0.05 * k)
+
+
+def _model_and_window(frames=120, speed=1 / 90, seed=0):
+    s = np.arange(L) / L
+    cycles = np.stack([_pose(s, k) for k in range(3)])
+    vel = np.gradient(cycles, axis=1)
+    acc = np.gradient(vel, axis=1)
+    model = CyclicMotionModel(cycles.mean(0), vel.mean(0), acc, temporal_sigma=0.005 / L)
+    phase = (0.1 + speed * np.arange(frames + 1)) % 1.0
+    angles = _pose(phase, 1)
+    window = Window(angles, np.zeros((frames + 1, 14, 3)), phase, np.full(frames + 1, speed),
+                        np.full(13, 0.3), 0, 1, 60.0)
+    # process noise: the one-step residuals of the truth (here: the model is nearly exact)
+    Q = np.diag(np.concatenate([np.full(A, 1e-6), np.full(A, 1e-6)]))
+    return model, window, Q
+
+
+def _error(est, window):
+    return float(angle_error_sq(est, window.angles[1:]).sum(-1).mean())
+
+
+@pytest.mark.parametrize("noise", [0.05, 0.1])
+def test_new_filters_beat_the_measurements_on_a_synthetic_stroke(noise):
+    model, window, Q = _model_and_window()
+    z = window.angles + noise * np.random.default_rng(1).standard_normal(window.angles.shape)
+    sigma = estimate_measurement_noise(z)
+    assert sigma == pytest.approx(noise, rel=0.15)
+    meas = _error(z[1:], window)
+    rb = run_rbpf(model, window, z, 2000, Q, sigma, seed=2)
+    ukf = run_ukf_tuned(model, window, z, Q, sigma, seed=2)
+    assert _error(rb["estimates"]["mean"], window) < 0.5 * meas
+    assert _error(ukf["estimates"]["mean"], window) < 0.5 * meas
+    assert _error(ukf["smoothed"]["estimates"]["mean"], window) < _error(ukf["estimates"]["mean"], window)
+
+
+def test_filters_predict_through_a_gap_better_than_constant_velocity():
+    model, window, Q = _model_and_window()
+    z = window.angles + 0.05 * np.random.default_rng(4).standard_normal(window.angles.shape)
+    mask = gap_mask(window.frames, 30, first=20, spacing=40)
+    zg = withhold(z, mask)
+    rb = run_rbpf(model, window, zg, 2000, Q, 0.05, seed=3)
+    inside = mask[1:]
+    err_rb = angle_error_sq(rb["estimates"]["mean"], window.angles[1:]).sum(-1)[inside].mean()
+    cv = gap_baselines(z, mask)["constant_velocity"]
+    err_cv = angle_error_sq(cv[1:], window.angles[1:]).sum(-1)[inside].mean()
+    assert err_rb < 0.5 * err_cv
+
+
+def test_gap_schedule_and_baselines_on_a_sinusoid():
+    mask = gap_mask(100, 10, first=20, spacing=40)
+    assert gap_runs(mask) == [(20, 30), (70, 80)] and not mask[0]
+    t = np.arange(101.0)
+    truth = np.stack([np.sin(0.05 * t), 0.02 * t], axis=1)     # a sinusoid and a straight line
+    base = gap_baselines(truth, mask, window=5)
+    # hold: the value at frame 19; interpolation between frames 19 and 30 is exact for the line
+    np.testing.assert_allclose(base["hold"][20:30], np.tile(truth[19], (10, 1)))
+    np.testing.assert_allclose(base["interpolation"][20:30, 1], truth[20:30, 1], atol=1e-12)
+    np.testing.assert_allclose(base["constant_velocity"][20:30, 1], truth[20:30, 1], atol=1e-12)
+    # the line through frames 15..19 of the sinusoid, extrapolated: slope ~ 0.05 cos(0.05 * 17)
+    slope = (base["constant_velocity"][21, 0] - base["constant_velocity"][20, 0])
+    assert slope == pytest.approx(0.05 * np.cos(0.05 * 17), rel=0.01)
+    assert np.array_equal(base["hold"][~mask], truth[~mask])
+    sq = np.ones(100)
+    sq[19:29] = 4.0                                              # frames 20..29 are sq[19:29]
+    e = gap_errors(sq, mask, phase=np.linspace(0, 0.99, 100), after=5)
+    assert e["frames_inside"] == 20 and e["frames_after"] == 10
+    assert e["inside"] == pytest.approx(2.5) and e["after"] == pytest.approx(1.0)
+    assert len(e["inside_per_phase"]) == 4
+
+
+def test_measurement_noise_estimate_ignores_withheld_rows():
+    rng = np.random.default_rng(5)
+    t = np.arange(400.0)
+    z = np.sin(0.02 * t)[:, None] + 0.03 * rng.standard_normal((400, 6))
+    z[100:130] = np.nan
+    assert estimate_measurement_noise(z) == pytest.approx(0.03, rel=0.1)
+
+
+def test_velocity_decay_fit_recovers_the_decay_of_a_synthetic_deviation():
+    from depthtrack.swim.tuning import fit_velocity_decay, predict_ahead
+
+    rng = np.random.default_rng(6)
+    M, rho = 300, 0.8
+    vel = 0.05 * np.sin(np.arange(M) / 20.0)[:, None] * np.ones((1, 3))      # the mean stroke's velocity
+    acc = np.zeros((M, 3))
+    th, om = np.zeros((M, 3)), np.zeros((M, 3))
+    for t in range(M - 1):                      # the model, with a kick to the velocity now and then
+        drift = rho * om[t] + (1 - rho) * vel[t]
+        th[t + 1] = th[t] + drift
+        om[t + 1] = drift + (0.05 * rng.standard_normal(3) if t % 15 == 0 else 0.0)
+    assert fit_velocity_decay([(th, om, acc, vel)], horizon=10) == pytest.approx(rho, abs=0.03)
+    pred = predict_ahead(th, om, acc, vel, 1.0, 5)
+    assert pred.shape == (5, M - 5, 3)
