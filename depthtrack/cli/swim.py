@@ -112,7 +112,7 @@ def register(subparsers) -> None:
                    help="comma-separated: particle and ukf (the thesis's, with the --sigma grid), rbpf (the "
                         "Rao-Blackwellised particle filter on the cycle state, for each --particles count), "
                         "ukf-tuned (the UKF with noise estimated from the training frames and the measurements), "
-                        "smoother (its RTS smoother, offline); default particle,ukf")
+                        "smoother (its RTS smoother, offline); both = particle,ukf (the default)")
     e.add_argument("--gaps", default=None, metavar="K,...",
                    help="also withhold the measurements for stretches of K frames (every K + 40 frames from "
                         "test frame 20) and report the errors inside and after the gaps, per stroke phase, "
