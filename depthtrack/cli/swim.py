@@ -50,6 +50,9 @@ def _common_training(p):
     p.add_argument("--cycle-starts", default=None,
                    help="manual cycle-start frames of the training take, comma-separated (overrides detection)")
     p.add_argument("--units", default=None, help="BVH units (metres per unit, or cmu/cm/m/inch); default inferred")
+    p.add_argument("--joint-map", default=None, metavar="MAP.json",
+                   help='BVH joints the reader does not recognise by name: {"our joint": "file joint"}, '
+                        'our joints as in the sequence contract (l_shoulder, l_elbow, ...)')
 
 
 def register(subparsers) -> None:
@@ -158,7 +161,7 @@ def run_evaluate(args) -> int:
     starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     setup = prepare(args.train, args.test, frames=args.frames, step=args.step, length=args.length,
                     smooth_sigma=args.smooth, derivative=args.derivative, temporal_sigma=args.temporal_sigma,
-                    train_starts=starts, units=args.units)
+                    train_starts=starts, units=args.units, joint_map=args.joint_map)
     setup.model.jitter = args.jitter
     log = None if (args.quiet or args.json) else (lambda text: print(text, file=sys.stderr))
     metrics, snapshot = run_evaluation(setup, particles, sigmas, estimators, inits, filters, random_sigmas,
@@ -180,7 +183,7 @@ def run_train(args) -> int:
     from ..swim.stickfigure import ANGLE_NAMES
     from ..swim.training import train_motion_model
 
-    mocap = load_swim_mocap(args.bvh, args.units)
+    mocap = load_swim_mocap(args.bvh, args.units, args.joint_map)
     starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
                                      smooth_sigma=args.smooth, last_frame=args.last_frame)
@@ -199,7 +202,7 @@ def run_derivatives(args) -> int:
     from ..swim.mocap import load_swim_mocap
     from ..swim.derivative_report import derivative_table, write_derivative_report
 
-    mocap = load_swim_mocap(args.bvh, args.units)
+    mocap = load_swim_mocap(args.bvh, args.units, args.joint_map)
     starts = _ints(args.cycle_starts, "--cycle-starts") if args.cycle_starts else None
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
                                      smooth_sigma=args.smooth)

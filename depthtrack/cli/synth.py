@@ -10,6 +10,7 @@ _EPILOG = """examples:
   depthtrack synth walk.bvh seq_walk --seconds 1 --camera kinect-v2
   depthtrack synth 126_01.bvh seq_swim --units cmu --fps 30 --start 2 --seconds 10
   depthtrack synth --procedural mixed seq_demo --noise none
+  depthtrack synth take.bvh seq_take --joint-map map.json   # map.json: {"l_shoulder": "L_UpArm", ...}
 
 The output is a sequence directory (or a single .npz when OUT ends in .npz) with
 ground-truth joints and Plug-in Gait surface markers; sequence.json records every
@@ -47,6 +48,10 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="noise random seed (default 0)")
     p.add_argument("--units", default=None,
                    help="BVH units: metres per unit or cmu, m, cm, mm, inch (default: inferred, reported)")
+    p.add_argument("--joint-map", default=None, metavar="MAP.json",
+                   help='BVH joints the reader does not recognise by name: a JSON object {"our joint": '
+                        '"file joint"} with our joint names (head, neck, pelvis, l_shoulder, l_elbow, '
+                        'l_wrist, l_hip, l_knee, l_ankle, r_...); the rest are found as usual')
     p.add_argument("--keep-leading-jump", action="store_true",
                    help="keep the frames a BVH motion teleports out of at its start (by default "
                         "they are dropped: CMU files open with a calibration T-pose)")
@@ -80,7 +85,7 @@ def run(args) -> int:
     if args.procedural:
         synth = synthesize_procedural(args.procedural, out, **common)
     else:
-        synth = synthesize_bvh(motion, out, units=args.units,
+        synth = synthesize_bvh(motion, out, units=args.units, joint_map=args.joint_map,
                                skip_leading_jump=not args.keep_leading_jump, **common)
     if not args.quiet:
         place = synth["placement"]

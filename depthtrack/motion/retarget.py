@@ -6,16 +6,18 @@ Method (bone-direction retargeting, twist from the BVH):
    standing skeleton (CMU, DeepMimic, Daz files), otherwise (Reallusion files, whose
    zero pose has every bone along its parent's local axes, and a Z-up root) the
    frame of the motion that stands most upright with the straightest legs
-   (:func:`reference_frame`). A *canonical* frame is read off it: its left, up and
-   forward axes are mapped to our model frame's (+x, -y, -z) by a rotation ``B``. In
-   that frame the BVH joint world rotations relative to the reference,
-   ``W~_j = B W_j W_j,ref^T B^T``, are the identity at the reference, like ours at rest.
+   (:func:`reference_frame`). Its own left, up and forward axes are mapped to our
+   model frame's (+x, -y, -z) by a rotation ``A``; the BVH world is mapped to a world
+   with our axes by ``B`` (:func:`canonical_axes`: ``B = A`` for a rest pose; for a
+   reference frame, up is the world's +y so the floor stays level). The BVH joint
+   world rotations relative to the reference, seen in our world,
+   ``W~_j = B W_j W_j,ref^T A^T``, are the identity at a rest-pose reference, like ours
+   at rest (for a frame reference they hold the reference's lean and heading).
 2. Each of our joints j takes the world orientation of the BVH joint that drives the
    same body part, corrected once for the different rest poses (A-pose vs T-pose vs
    arms down): ``G_j = W~_drv K_j`` with ``K_j`` the rotation taking our rest bone
    direction to the BVH rest bone direction (a best-fit rotation for the chest, which
-   carries three bones; the identity for pelvis and feet, whose rests agree, except
-   that a reference frame's pelvis tilt is fitted too).
+   carries three bones; the identity for pelvis and feet, whose rests agree).
 3. Where the bone ends at a contract point (limbs, head), ``G_j`` is turned by the
    smallest rotation that makes our bone point exactly where the BVH bone points
    now, so differing skeleton layouts still give the right directions.
@@ -129,12 +131,15 @@ def _stands(points) -> bool:
 def reference_frame(motion):
     """The motion frame used as the reference pose, or ``None`` for the rest pose.
 
-    ``None`` when the rest pose (every channel zero) stands (:func:`_stands`), as in
-    CMU, DeepMimic and Daz files. Otherwise the frame that best stands upright in the
-    BVH world (y up): the largest sum of the cosines between the hips-to-neck axis and
-    +y and, averaged, between each leg bone and -y.
+    ``None`` when the rest pose (every channel zero) stands (:func:`_stands`) upright in
+    the BVH world (y up, the BVH convention; within 35 degrees), as in CMU, DeepMimic and
+    Daz files. Otherwise (Reallusion files; a rest pose that is turned upright only by
+    the root's rotation channels) the frame that best stands upright: the largest sum of
+    the cosines between the hips-to-neck axis and +y and, averaged, between each leg
+    bone and -y.
     """
-    if _stands(_rest_motion(motion).contract_joint_positions()[0]):
+    rest = _rest_motion(motion).contract_joint_positions()[0]
+    if _stands(rest) and _axes_of(rest)[1][1] > 0.82:
         return None
     c = motion.contract_joint_positions()                                  # (F, 15, 3)
     hips = 0.5 * (c[:, C["l_hip"]] + c[:, C["r_hip"]])
@@ -154,23 +159,40 @@ def _reference_motion(motion):
     return motion._cache["reference"]
 
 
-def canonical_axes(motion) -> np.ndarray:
-    """(3, 3) rotation ``B`` from the BVH world to the canonical frame of its reference pose.
+def _axes_of(points):
+    """``(left, up, forward)`` unit vectors of a standing skeleton's contract points ``(15, 3)``.
 
-    In the canonical frame the reference skeleton's own left is +x, up is -y and
-    forward is -z, like our model frame. Left is read from the hips and shoulders, up
-    from the ankles to the head (for a reference frame of the motion: the BVH world's
-    +y, so that the floor stays level).
+    Up from the ankles to the head, left from the hips and the shoulders (made normal
+    to up), forward = left x up.
+    """
+    up = _unit(points[C["head"]] - 0.5 * (points[C["l_ankle"]] + points[C["r_ankle"]]))
+    left = (points[C["l_hip"]] - points[C["r_hip"]]) + (points[C["l_shoulder"]] - points[C["r_shoulder"]])
+    left = _unit(left - (left @ up) * up)
+    return left, up, np.cross(left, up)
+
+
+def _reference_axes(motion) -> np.ndarray:
+    """(3, 3) rotation from the BVH world to the reference pose's own axes (rows left, down, back)."""
+    left, up, forward = _axes_of(_reference_motion(motion)[0].contract_joint_positions()[0])
+    return np.stack([left, -up, -forward])
+
+
+def canonical_axes(motion) -> np.ndarray:
+    """(3, 3) rotation ``B`` from the BVH world to a world with our model's axes.
+
+    Our model frame has the body's left +x, up -y and forward -z; ``B`` maps the
+    reference pose's left, up and forward there. For a rest-pose reference that is
+    the rest pose's own axes (up from the ankles to the head); for a reference frame
+    of the motion, up is the BVH world's +y (so that the floor stays level) and left
+    the reference's left made horizontal.
     """
     ref, frame = _reference_motion(motion)
-    rest = ref.contract_joint_positions()[0]
-    up = _unit(rest[C["head"]] - 0.5 * (rest[C["l_ankle"]] + rest[C["r_ankle"]]))
-    if frame is not None and up[1] > 0.8:
-        up = np.array([0.0, 1.0, 0.0])
-    left = (rest[C["l_hip"]] - rest[C["r_hip"]]) + (rest[C["l_shoulder"]] - rest[C["r_shoulder"]])
+    if frame is None:
+        return _reference_axes(motion)
+    left, _, _ = _axes_of(ref.contract_joint_positions()[0])
+    up = np.array([0.0, 1.0, 0.0])
     left = _unit(left - (left @ up) * up)
-    forward = np.cross(left, up)
-    return np.stack([left, -up, -forward])
+    return np.stack([left, -up, -np.cross(left, up)])
 
 
 def rest_span(points) -> float:
@@ -238,16 +260,17 @@ def retarget(motion, body, world_to_camera=None, scale=None) -> np.ndarray:
 
     world = motion.world_transforms()
     rest_motion, frame = _reference_motion(motion)
-    if frame is None:
-        W = np.einsum("ij,fkjl,ml->fkim", B, world[..., :3, :3], B)      # canonical, rest = I
-    else:
-        # Relative to the reference frame: W_j W_j,ref^T, so the identity there.
-        rel = world[..., :3, :3] @ np.swapaxes(world[frame, :, :3, :3], -1, -2)
-        W = np.einsum("ij,fkjl,ml->fkim", B, rel, B)
+    # A (reference) in its own axes A, turned by W_j W_j,ref^T in the BVH world, seen
+    # in our world B: B W_j W_j,ref^T A^T, the identity at the reference when A = B.
+    A = B if frame is None else _reference_axes(motion)
+    rel = world[..., :3, :3]
+    if frame is not None:
+        rel = rel @ np.swapaxes(world[frame, :, :3, :3], -1, -2)
+    W = np.einsum("ij,fkjl,ml->fkim", B, rel, A)
     contract = motion.contract_joint_positions() @ B.T                 # (F, 15, 3) canonical
-    rest_contract = rest_motion.contract_joint_positions()[0] @ B.T
-    rest_joints = rest_motion.joint_positions()[0] @ B.T
-    rest_ends = rest_motion.end_site_positions()[0] @ B.T if len(motion.end_site_parents) else None
+    rest_contract = rest_motion.contract_joint_positions()[0] @ A.T
+    rest_joints = rest_motion.joint_positions()[0] @ A.T
+    rest_ends = rest_motion.end_site_positions()[0] @ A.T if len(motion.end_site_parents) else None
     ours_rest = np.asarray(body.joint_positions(np.zeros(body.dof)))   # contract order
     offsets = np.asarray(body.offsets, float)
 
@@ -287,13 +310,6 @@ def retarget(motion, body, world_to_camera=None, scale=None) -> np.ndarray:
             if np.linalg.norm(their) < 1e-9:
                 their = rest_joints[d] - rest_joints[motion.parents[d]]
             G[:, j] = W[:, d] @ rotation_between(forearm, their)
-        elif name == "pelvis" and frame is not None:
-            # A reference frame stands, but not exactly upright: fit the pelvis's tilt
-            # from the hips and the neck (a rest pose is upright by construction).
-            pts = ("l_hip", "r_hip", "neck")
-            ours = np.stack([ours_rest[C[n]] - ours_rest[C["pelvis"]] for n in pts])
-            theirs = np.stack([rest_contract[C[n]] - rest_joints[d] for n in pts])
-            G[:, j] = W[:, d] @ best_rotation(_unit(ours), _unit(theirs))
         else:
             G[:, j] = W[:, d]
 

@@ -285,13 +285,13 @@ class SwimSetup:
 
 def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int = 100,
             smooth_sigma: float = 2.0, derivative: str = "taylor3", temporal_sigma=None,
-            train_starts=None, side: str = "right", units=None) -> SwimSetup:
+            train_starts=None, side: str = "right", units=None, joint_map=None) -> SwimSetup:
     """Load the takes, split, train the model and cut the test window."""
     if frames < 1 or step < 1:
         raise InputError(None, "--frames and --step must be positive")
-    train = load_swim_mocap(train_path, units)
+    train = load_swim_mocap(train_path, units, joint_map)
     same = Path(test_path).resolve() == Path(train_path).resolve()
-    test = train if same else load_swim_mocap(test_path, units)
+    test = train if same else load_swim_mocap(test_path, units, joint_map)
     last_train, first, test_starts = plan_split(train, test, frames, step, side)
     training = build_training_cycles(train.joints, train.fps, starts=train_starts, length=length,
                                      smooth_sigma=smooth_sigma, side=side, last_frame=last_train)

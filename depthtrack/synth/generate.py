@@ -139,7 +139,8 @@ def _window(poses, fps, start, seconds, path=None):
 
 def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                    distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0, units=None,
-                   camera_height=None, quiet=True, body=None, skip_leading_jump=True) -> dict:
+                   camera_height=None, quiet=True, body=None, skip_leading_jump=True,
+                   joint_map=None) -> dict:
     """Synthesize a sequence from a BVH file (see :func:`synthesize`).
 
     The motion is retargeted onto the default body of the given height (full mesh),
@@ -147,12 +148,15 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
     ``skip_leading_jump``, frames the motion teleports out of at its start
     (:meth:`BvhMotion.leading_jump`, e.g. CMU's calibration T-pose) are dropped first and
     ``start`` counts from the frame after them; ``sequence.json`` records how many.
+    ``joint_map`` (``{our joint: file joint}`` or a JSON file) names joints the BVH
+    reader's naming conventions do not find.
     """
     from ..body import BodyModel
     from ..io.bvh import read_bvh
     from ..motion.retarget import canonical_axes, resample_poses, retarget, subject_height
 
-    motion = read_bvh(motion_path, units=units)
+    motion = read_bvh(motion_path, units=units, joint_map=joint_map)
+    motion.contract_joint_indices()     # refuse a skeleton we cannot map before any work
     body = BodyModel.default(height=height, mesh="full") if body is None else body
     to_world = np.eye(4)
     to_world[:3, :3] = canonical_axes(motion)     # BVH world -> y-down world facing like the rest pose
@@ -167,6 +171,7 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
     source = {"kind": "bvh", "file": os.path.basename(os.fspath(motion_path)),
               "units_m": motion.units_m, "units_source": motion.units_source,
               "frames": motion.n_frames, "fps": round(motion.fps, 6),
+              "joint_names": motion.convention(), "joint_map": motion.joint_map,
               "skipped_leading_frames": skipped,
               "skipped_because": ("the motion jumps out of them faster than a body moves "
                                   "(a calibration pose)") if skipped else None,
