@@ -234,6 +234,7 @@ def map_joints(names, parents, end_site_parents, joint_map=None, path=None) -> d
         names each missing joint may have.
     """
     parents = [int(p) for p in parents]
+    joint_map = check_joint_map(joint_map, path) if joint_map is not None else None
     split = [split_name(n) for n in names]
     by_name = {}
     for j, n in enumerate(names):
