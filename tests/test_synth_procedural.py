@@ -1,0 +1,42 @@
+"""The built-in motions of the held-out benchmark, and their train / dev / test split."""
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.contract import JOINT_INDEX as C
+from depthtrack.synth.procedural import PROCEDURAL_MOTIONS, PROCEDURAL_SPLIT, procedural_motion
+
+
+@pytest.fixture(scope="module")
+def body():
+    return BodyModel.default(mesh="decimated")
+
+
+def test_every_motion_in_exactly_one_split():
+    names = [n for split in ("train", "dev", "test") for n in PROCEDURAL_SPLIT[split]]
+    assert sorted(names) == sorted(PROCEDURAL_MOTIONS) and len(names) == len(set(names))
+
+
+def test_spins_turn_in_place_at_their_speeds(body):
+    for name, turns in (("spin-slow", 1), ("spin", 2), ("spin-fast", 3)):
+        poses = procedural_motion(name, body, 25.0)
+        assert poses[-1, 4] == pytest.approx(2 * np.pi * turns)          # pelvis_ry: turns about the vertical
+        assert np.abs(poses[:, [0, 2]]).max() < 1e-9                       # in place
+
+
+def test_benchmark_motions_rest_on_the_floor(body):
+    rest = np.asarray(body.posed_vertices(np.zeros((1, body.dof))))[0, :, 1].max()
+    for name in ("bend", "squat-deep", "lie-down", "overhead", "sidestep", "walk-back"):
+        poses = procedural_motion(name, body, 10.0)
+        assert np.all(np.isfinite(poses))
+        assert np.abs(np.diff(poses, axis=0)[:, 3:]).max() < 0.5            # smooth at 10 fps
+        lowest = np.asarray(body.posed_vertices(poses))[..., 1].max(axis=1)
+        np.testing.assert_allclose(lowest, rest, atol=1e-9)
+        joints = body.joint_positions(poses)
+        if name == "lie-down":          # lying flat: the head near the floor (y down), halfway through
+            mid = joints[len(joints) // 2]
+            assert rest - mid[C["head"], 1] < 0.3 and rest - joints[0, C["head"], 1] > 1.4
+        if name == "sidestep":          # to the subject's left (+x) and back
+            assert joints[:, C["pelvis"], 0].max() > 1.0 and abs(joints[-1, C["pelvis"], 0]) < 0.1
+        if name == "walk-back":         # away from where it faces (it faces -z)
+            assert joints[:, C["pelvis"], 2].max() > 0.8
