@@ -10,6 +10,7 @@ _EPILOG = """examples:
   depthtrack synth walk.bvh seq_walk --seconds 1 --camera kinect-v2
   depthtrack synth 126_01.bvh seq_swim --units cmu --fps 30 --start 2 --seconds 10
   depthtrack synth --procedural mixed seq_demo --noise none
+  depthtrack synth --procedural spin seq_spin --camera azure-nfov --azimuth 135 --camera-height 2.2 --pitch 30
   depthtrack synth take.bvh seq_take --joint-map map.json   # map.json: {"l_shoulder": "L_UpArm", ...}
 
 The output is a sequence directory (or a single .npz when OUT ends in .npz) with
@@ -43,6 +44,9 @@ def register(subparsers) -> None:
                    help="turn the camera about the subject from straight in front (degrees)")
     p.add_argument("--camera-height", type=float, default=None, metavar="M",
                    help="camera height above the floor (default 0.72 x subject height, chest)")
+    p.add_argument("--pitch", type=float, default=None, metavar="DEG",
+                   help="camera tilt down from horizontal in degrees, negative = up (default: aimed "
+                        "at the middle of the body)")
     p.add_argument("--height", type=float, default=1.75, metavar="M", help="subject height (default 1.75)")
     p.add_argument("--noise", choices=("tof", "none"), default="tof", help="noise model (default tof)")
     p.add_argument("--seed", type=int, default=0, help="noise random seed (default 0)")
@@ -76,11 +80,14 @@ def run(args) -> int:
             raise InputError(None, f"--{name} must be positive")
     if args.seconds is not None and not args.seconds > 0:
         raise InputError(None, "--seconds must be positive")
+    if args.pitch is not None and not -89.0 <= args.pitch <= 89.0:
+        raise InputError(None, "--pitch must be between -89 and 89 degrees")
     if args.distance is not None and not args.distance > 0:
         raise InputError(None, "--distance must be positive")
     common = dict(fps=args.fps, start=args.start, seconds=args.seconds, camera=args.camera,
                   distance=args.distance, azimuth=args.azimuth, height=args.height,
-                  noise=args.noise, seed=args.seed, camera_height=args.camera_height, quiet=args.quiet)
+                  noise=args.noise, seed=args.seed, camera_height=args.camera_height, quiet=args.quiet,
+                  pitch=args.pitch)
     t0 = time.perf_counter()
     if args.procedural:
         synth = synthesize_procedural(args.procedural, out, **common)

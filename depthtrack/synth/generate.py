@@ -42,7 +42,7 @@ def ground_truth(body, poses, vertices):
 
 def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=None, azimuth=0.0,
                camera_height=None, noise="tof", seed=0, depth_scale=0.001, source=None,
-               quiet=True, renderer=None) -> dict:
+               quiet=True, renderer=None, pitch=None) -> dict:
     """Render, add noise and write a synthetic sequence.
 
     Parameters
@@ -56,6 +56,8 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
     camera : str or Camera
         A preset name from :data:`depthtrack.camera.CAMERA_PRESETS` or intrinsics.
     distance, azimuth, camera_height : see :func:`depthtrack.synth.scene.place_camera`.
+    pitch : float or None
+        Downward tilt of the camera in degrees (``place_camera``'s ``pitch_deg``).
     noise : {"tof", "none"} or ToFNoise
     seed : int
         Seeds the noise generator.
@@ -83,7 +85,7 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
     else:
         noise_model = noise
     placement = place_camera(cam, body, world_poses, distance=distance, azimuth_deg=azimuth,
-                             height=camera_height,
+                             height=camera_height, pitch_deg=pitch,
                              max_depth=noise_model.max_range if noise_model is not None else np.inf)
     poses = transform_poses(world_poses, placement.world_to_camera)
     meshes = scene_meshes(placement)
@@ -140,7 +142,7 @@ def _window(poses, fps, start, seconds, path=None):
 def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                    distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0, units=None,
                    camera_height=None, quiet=True, body=None, skip_leading_jump=True,
-                   joint_map=None) -> dict:
+                   joint_map=None, pitch=None) -> dict:
     """Synthesize a sequence from a BVH file (see :func:`synthesize`).
 
     The motion is retargeted onto the default body of the given height (full mesh),
@@ -180,12 +182,13 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
               "retarget": {"method": "bone directions, twist from BVH, hip centre follows BVH",
                            "root_scale": round(scale, 6)}}
     return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
-                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet)
+                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
+                      pitch=pitch)
 
 
 def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                           distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0,
-                          camera_height=None, quiet=True, body=None) -> dict:
+                          camera_height=None, quiet=True, body=None, pitch=None) -> dict:
     """Synthesize a sequence from a built-in motion (see :mod:`depthtrack.synth.procedural`)."""
     from ..body import BodyModel
     from .procedural import PROCEDURAL_MOTIONS, procedural_motion
@@ -199,4 +202,5 @@ def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="
     source = {"kind": "procedural", "name": name, "start_s": start,
               "seconds": None if seconds is None else float(seconds)}
     return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
-                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet)
+                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
+                      pitch=pitch)
