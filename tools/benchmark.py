@@ -183,8 +183,8 @@ def aggregate(sequences: list, methods: list) -> tuple:
             by_seed.setdefault(s["seed_index"], []).append(s["metrics"][m])
         stats = {}
         for k in METRICS:
-            per_seed = [np.mean([x[k] for x in xs if x.get(k) is not None]) for xs in by_seed.values()]
-            stats[k] = _stats(per_seed)
+            known = [[x[k] for x in xs if x.get(k) is not None] for xs in by_seed.values()]
+            stats[k] = _stats(float(np.mean(v)) for v in known if v)
         group_means = [r["methods"][m]["within_10cm"]["mean"] for r in rows]
         stats["worst_group_within_10cm"] = min(group_means)
         stats["fps_min"] = min(r["methods"][m]["fps_min"] for r in rows)
