@@ -408,3 +408,16 @@ def test_back_stroke_in_3dsmax_names_loads_to_the_same_joints(shared_data, tmp_p
     b = read_bvh(path)
     assert b.convention() == "CMU cgspeed 3dsMax" and b.units_m == a.units_m
     np.testing.assert_array_equal(b.contract_joint_positions(), a.contract_joint_positions()[:len(b.frames)])
+
+
+def test_swim_reads_bvh_through_the_same_mapping(tmp_path):
+    from depthtrack.swim.mocap import load_swim_mocap
+    from depthtrack.swim.stickfigure import SWIM_INDEX
+
+    path = _write(tmp_path, bvh_text(_odd_skeleton(), 0.01))
+    with pytest.raises(InputError, match="--joint-map"):
+        load_swim_mocap(path)
+    joint_map = {f"{s}_{j}": f"Bone{s.upper()}{k}" for s in "lr" for k, j in ((1, "shoulder"), (2, "elbow"), (3, "wrist"))}
+    mocap = load_swim_mocap(path, joint_map=joint_map)
+    np.testing.assert_allclose(mocap.joints[0, SWIM_INDEX["l_elbow"]], (rest_cm("l_elbow") + [0, 100, 0]) * 0.01,
+                               atol=1e-6)
