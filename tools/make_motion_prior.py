@@ -4,10 +4,15 @@
 Usage::
 
     .venv/bin/python tools/make_motion_prior.py [BVH or DIR ...] [-o depthtrack/data/motion_prior.json]
-        [--analysis-fps 30]
+        [--analysis-fps 30] [--data ../shared/data] [--joint-map MAP.json]
 
-Default inputs: every ``*.bvh`` under ``../shared/data`` (the DeepMimic clips and the CMU
-back stroke). Each clip is read with :func:`depthtrack.io.bvh.read_bvh`, retargeted onto
+Default inputs: the ``train`` clips of the motion split, ``depthtrack/data/motion_split.json``
+(paths relative to ``--data``, default ``../shared/data``): a prior is fitted on train
+motions only, never on the dev or test ones. The shipped prior
+(``depthtrack/data/motion_prior.json``, its ``clips`` list) was made from the four DeepMimic
+clips and the CMU back stroke, all train clips; it is not regenerated when the split grows.
+Each clip is read with :func:`depthtrack.io.bvh.read_bvh` (any naming convention, or
+``--joint-map``), retargeted onto
 the default body (:func:`depthtrack.motion.retarget.retarget`), resampled to the analysis
 rate (rotations slerped; a leading T-pose calibration frame is dropped), and its relative velocities ``v_t`` (see
 :mod:`depthtrack.motion.prior`) differenced: ``alpha = (v_t - v_{t-1}) * fps^2``.
@@ -36,13 +41,22 @@ from depthtrack.io.bvh import read_bvh  # noqa: E402
 from depthtrack.motion.prior import accelerations_of, velocities_of  # noqa: E402
 from depthtrack.motion.retarget import resample_poses, retarget  # noqa: E402
 
+#: The train / dev / test split of the mocap clips.
+SPLIT = REPO / "depthtrack" / "data" / "motion_split.json"
+
 #: Floor on a stored deviation, so a parameter that never moves in the data keeps a usable prior.
 MIN_ACCEL_STD = 1.0
 
 
-def clip_accelerations(path, body, analysis_fps):
+def train_clips(data_dir, split_path=SPLIT):
+    """Paths of the motion split's train clips under ``data_dir``."""
+    split = json.loads(Path(split_path).read_text(encoding="utf-8"))
+    return [Path(data_dir) / rel for rel in split["train"]]
+
+
+def clip_accelerations(path, body, analysis_fps, joint_map=None):
     """(K, 48) accelerations of one BVH clip at ``analysis_fps``, and a description of it."""
-    motion = read_bvh(path)
+    motion = read_bvh(path, joint_map=joint_map)
     poses = retarget(motion, body)
     dropped = motion.leading_jump()
     poses = resample_poses(poses[dropped:], motion.fps, analysis_fps)
@@ -55,14 +69,23 @@ def clip_accelerations(path, body, analysis_fps):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("inputs", nargs="*", help="BVH files or directories (default ../shared/data)")
+    parser.add_argument("inputs", nargs="*",
+                        help="BVH files or directories (default: the train clips of "
+                             "depthtrack/data/motion_split.json under --data)")
+    parser.add_argument("--data", default=str(REPO.parent / "shared" / "data"),
+                        help="where the split's clips are (default ../shared/data)")
+    parser.add_argument("--joint-map", default=None, metavar="MAP.json",
+                        help='{"our joint": "file joint"} for skeletons whose names are not recognised')
     parser.add_argument("-o", "--output", default=str(REPO / "depthtrack" / "data" / "motion_prior.json"))
     parser.add_argument("--analysis-fps", type=float, default=30.0)
     args = parser.parse_args(argv)
 
-    inputs = args.inputs or [str(REPO.parent / "shared" / "data")]
-    files = []
-    for item in inputs:
+    files = [] if args.inputs else train_clips(args.data)
+    missing = [str(f) for f in files if not f.is_file()]
+    if missing:
+        print(f"make_motion_prior: train clips not found: {', '.join(missing)}", file=sys.stderr)
+        return 2
+    for item in args.inputs:
         p = Path(item)
         files += sorted(p.rglob("*.bvh")) if p.is_dir() else [p]
     if not files:
@@ -71,7 +94,7 @@ def main(argv=None):
     body = BodyModel.default()
     accs, clips = [], []
     for f in files:
-        acc, info = clip_accelerations(f, body, args.analysis_fps)
+        acc, info = clip_accelerations(f, body, args.analysis_fps, args.joint_map)
         accs.append(acc)
         clips.append(info)
         print(f"{f.name}: {info['frames']} frames at {args.analysis_fps:g} Hz "

@@ -75,6 +75,9 @@ def _common_training(p):
     p.add_argument("--stroke", default="back", choices=("back", "freestyle", "breast", "butterfly", "auto"),
                    help="stroke, for the cycle detection: back and freestyle by the upper arm pointing up, "
                         "the others (and auto) by periodicity of the angles (default back)")
+    p.add_argument("--joint-map", default=None, metavar="MAP.json",
+                   help='BVH joints the reader does not recognise by name: {"our joint": "file joint"}, '
+                        'our joints as in the sequence contract (l_shoulder, l_elbow, ...)')
 
 
 def register(subparsers) -> None:
@@ -207,7 +210,8 @@ def run_evaluate(args) -> int:
     _check_out(args, "report", [args.train, args.test], "dir", "swim evaluate")
     setup = prepare(args.train, args.test, frames=args.frames, step=args.step, length=args.length,
                     smooth_sigma=args.smooth, derivative=args.derivative, temporal_sigma=args.temporal_sigma,
-                    train_starts=starts, units=args.units, test_start=args.test_start, stroke=args.stroke)
+                    train_starts=starts, units=args.units, test_start=args.test_start, stroke=args.stroke,
+                    joint_map=args.joint_map)
     setup.model.jitter = args.jitter
     log = None if (args.quiet or args.json) else (lambda text: print(text, file=sys.stderr))
     metrics, snapshot = run_evaluation(setup, particles, sigmas, estimators, inits, filters, random_sigmas,
@@ -231,7 +235,7 @@ def run_train(args) -> int:
 
     starts = _starts(args.cycle_starts) if args.cycle_starts else None
     _check_out(args, "output", [args.bvh], "file", "swim train")
-    mocap = load_swim_mocap(args.bvh, args.units)
+    mocap = load_swim_mocap(args.bvh, args.units, args.joint_map)
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
                                      smooth_sigma=args.smooth, last_frame=args.last_frame, stroke=args.stroke)
     model = train_motion_model(training, args.derivative)
@@ -251,7 +255,7 @@ def run_derivatives(args) -> int:
 
     starts = _starts(args.cycle_starts) if args.cycle_starts else None
     _check_out(args, "report", [args.bvh], "dir", "swim derivatives")
-    mocap = load_swim_mocap(args.bvh, args.units)
+    mocap = load_swim_mocap(args.bvh, args.units, args.joint_map)
     training = build_training_cycles(mocap.joints, mocap.fps, starts=starts, length=args.length,
                                      smooth_sigma=args.smooth, stroke=args.stroke)
     rows = compare_derivative_filters(training.cycles)

@@ -13,6 +13,8 @@ _EPILOG = """examples:
   depthtrack synth --procedural mixed seq_demo --noise none
   depthtrack synth walk.bvh seq_person3 --shape random --shape-seed 3 --clothing loose
   depthtrack synth --procedural wave seq_me --shape my_shape.json --height 1.82
+  depthtrack synth --procedural spin seq_spin --camera azure-nfov --azimuth 135 --camera-height 2.2 --pitch 30
+  depthtrack synth take.bvh seq_take --joint-map map.json   # map.json: {"l_shoulder": "L_UpArm", ...}
 
 The output is a sequence directory (or a single .npz when OUT ends in .npz) with
 ground-truth joints and Plug-in Gait surface markers; sequence.json records every
@@ -59,10 +61,17 @@ def register(subparsers) -> None:
     p.add_argument("--clothing", choices=("none", "tight", "loose"), default="none",
                    help="clothing over trunk and legs: tight (5 mm) or loose (1-4 cm offset "
                         "surface); default none")
+    p.add_argument("--pitch", type=number(-89, 89), default=None, metavar="DEG",
+                   help="camera tilt down from horizontal in degrees, negative = up (default: aimed "
+                        "at the middle of the body)")
     p.add_argument("--noise", choices=("tof", "none"), default="tof", help="noise model (default tof)")
     p.add_argument("--seed", type=SEED, default=0, help="noise random seed (default 0)")
     p.add_argument("--units", default=None,
                    help="BVH units: metres per unit or cmu, m, cm, mm, inch (default: inferred, reported)")
+    p.add_argument("--joint-map", default=None, metavar="MAP.json",
+                   help='BVH joints the reader does not recognise by name: a JSON object {"our joint": '
+                        '"file joint"} with our joint names (head, neck, pelvis, l_shoulder, l_elbow, '
+                        'l_wrist, l_hip, l_knee, l_ankle, r_...); the rest are found as usual')
     p.add_argument("--keep-leading-jump", action="store_true",
                    help="keep the frames a BVH motion teleports out of at its start (by default "
                         "they are dropped: CMU files open with a calibration T-pose)")
@@ -92,12 +101,12 @@ def run(args) -> int:
     common = dict(fps=args.fps, start=args.start, seconds=args.seconds, camera=args.camera,
                   distance=args.distance, azimuth=args.azimuth, height=body.height,
                   noise=args.noise, seed=args.seed, camera_height=args.camera_height, quiet=args.quiet,
-                  body=body, subject=subject)
+                  body=body, subject=subject, pitch=args.pitch)
     t0 = time.perf_counter()
     if args.procedural:
         synth = synthesize_procedural(args.procedural, out, **common)
     else:
-        synth = synthesize_bvh(motion, out, units=args.units,
+        synth = synthesize_bvh(motion, out, units=args.units, joint_map=args.joint_map,
                                skip_leading_jump=not args.keep_leading_jump, **common)
     if not args.quiet:
         place = synth["placement"]

@@ -1,5 +1,10 @@
 """File formats: depth sequences and recordings (one reader registry), ground truth, BVH, C3D
-markers, track outputs."""
+markers, track outputs and exports.
+
+``io`` sits below ``body``: it imports nothing from it (the BVH writer takes a body object
+and reads its attributes; rotations come from :mod:`depthtrack.rotations`), while
+``body`` may use ``io`` (its glTF writer writes through :mod:`depthtrack.io.atomic`).
+"""
 from .bvh import BvhMotion, read_bvh, write_bvh
 from .c3d import import_c3d_markers, read_c3d_markers
 from .sequence import Sequence, open_sequence, write_sequence

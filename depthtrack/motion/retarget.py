@@ -2,10 +2,17 @@
 
 Method (bone-direction retargeting, twist from the BVH):
 
-1. A *canonical* frame is read off the BVH rest pose (all channels zero): its left,
-   up and forward axes are mapped to our model frame's (+x, -y, -z) by a rotation
-   ``B``. In that frame the BVH joint world rotations ``W~_j = B W_j B^T`` are the
-   identity at rest, like ours.
+1. A *reference pose* of the BVH: its rest pose (all channels zero) when that is a
+   standing skeleton (CMU, DeepMimic, Daz files), otherwise (Reallusion files, whose
+   zero pose has every bone along its parent's local axes, and a Z-up root) the
+   frame of the motion that stands most upright with the straightest legs
+   (:func:`reference_frame`). Its own left, up and forward axes are mapped to our
+   model frame's (+x, -y, -z) by a rotation ``A``; the BVH world is mapped to a world
+   with our axes by ``B`` (:func:`canonical_axes`: ``B = A`` for a rest pose; for a
+   reference frame, up is the world's +y so the floor stays level). The BVH joint
+   world rotations relative to the reference, seen in our world,
+   ``W~_j = B W_j W_j,ref^T A^T``, are the identity at a rest-pose reference, like ours
+   at rest (for a frame reference they hold the reference's lean and heading).
 2. Each of our joints j takes the world orientation of the BVH joint that drives the
    same body part, corrected once for the different rest poses (A-pose vs T-pose vs
    arms down): ``G_j = W~_drv K_j`` with ``K_j`` the rotation taking our rest bone
@@ -27,24 +34,17 @@ import numpy as np
 from ..body.rotations import matrix_to_rotvec, rotvec_to_matrix, slerp
 from ..contract import JOINT_INDEX as C
 
-#: For each body joint: (BVH joint names that drive it, first found wins;
-#: contract point the bone starts at, contract point it ends at, or None).
-_DRIVERS = {
-    "pelvis": (("Hips", "Hip", "Pelvis"), None),
-    "spine": (None, None),   # the chest joint: found from the skeleton, see _chest_joint
-    "neck": (("Neck1", "Neck"), ("neck", "head")),
-    "l_shoulder": (("LeftArm", "LeftUpArm"), ("l_shoulder", "l_elbow")),
-    "l_elbow": (("LeftForeArm", "LeftLowArm"), ("l_elbow", "l_wrist")),
-    "l_wrist": (("LeftHand",), None),
-    "r_shoulder": (("RightArm", "RightUpArm"), ("r_shoulder", "r_elbow")),
-    "r_elbow": (("RightForeArm", "RightLowArm"), ("r_elbow", "r_wrist")),
-    "r_wrist": (("RightHand",), None),
-    "l_hip": (("LeftUpLeg", "LeftThigh"), ("l_hip", "l_knee")),
-    "l_knee": (("LeftLeg", "LeftShin", "LeftLowLeg"), ("l_knee", "l_ankle")),
-    "l_ankle": (("LeftFoot",), None),
-    "r_hip": (("RightUpLeg", "RightThigh"), ("r_hip", "r_knee")),
-    "r_knee": (("RightLeg", "RightShin", "RightLowLeg"), ("r_knee", "r_ankle")),
-    "r_ankle": (("RightFoot",), None),
+#: For each body joint: the contract point its bone starts at and the one it ends at, or
+#: None. The BVH joint that drives it is the contract joint of the same name
+#: (:meth:`BvhMotion.contract_joint_indices`, any naming convention or a joint map).
+_BONES = {
+    "pelvis": None,
+    "spine": None,   # the chest joint: found from the skeleton, see _chest_joint
+    "neck": ("neck", "head"),
+    "l_shoulder": ("l_shoulder", "l_elbow"), "l_elbow": ("l_elbow", "l_wrist"), "l_wrist": None,
+    "r_shoulder": ("r_shoulder", "r_elbow"), "r_elbow": ("r_elbow", "r_wrist"), "r_wrist": None,
+    "l_hip": ("l_hip", "l_knee"), "l_knee": ("l_knee", "l_ankle"), "l_ankle": None,
+    "r_hip": ("r_hip", "r_knee"), "r_knee": ("r_knee", "r_ankle"), "r_ankle": None,
 }
 
 
@@ -106,26 +106,93 @@ def best_rotation(source, target, weights=None):
     return U @ D @ Vt
 
 
-def _rest_motion(motion):
-    """A copy of ``motion`` holding one frame with every channel zero."""
+def _one_frame(motion, values):
+    """A copy of ``motion`` holding the single frame ``values (C,)``."""
     from dataclasses import replace
 
-    return replace(motion, frames=np.zeros((1, motion.frames.shape[1])), _cache={})
+    return replace(motion, frames=np.asarray(values, float).reshape(1, -1), _cache={})
+
+
+def _rest_motion(motion):
+    """A copy of ``motion`` holding one frame with every channel zero."""
+    return _one_frame(motion, np.zeros(motion.frames.shape[1]))
+
+
+def _stands(points) -> bool:
+    """Whether contract points ``(15, 3)`` form a standing skeleton: both legs, bone by
+    bone, point away from the neck within 45 degrees of the hips-to-neck axis."""
+    hips = 0.5 * (points[C["l_hip"]] + points[C["r_hip"]])
+    up = _unit(points[C["neck"]] - hips)
+    bones = [points[C[b]] - points[C[a]] for a, b in
+             (("l_hip", "l_knee"), ("l_knee", "l_ankle"), ("r_hip", "r_knee"), ("r_knee", "r_ankle"))]
+    return bool(np.all(_unit(np.array(bones)) @ up < -0.7) and (points[C["head"]] - points[C["neck"]]) @ up > 0)
+
+
+def reference_frame(motion):
+    """The motion frame used as the reference pose, or ``None`` for the rest pose.
+
+    ``None`` when the rest pose (every channel zero) stands (:func:`_stands`) upright in
+    the BVH world (y up, the BVH convention; within 35 degrees), as in CMU, DeepMimic and
+    Daz files. Otherwise (Reallusion files; a rest pose that is turned upright only by
+    the root's rotation channels) the frame that best stands upright: the largest sum of
+    the cosines between the hips-to-neck axis and +y and, averaged, between each leg
+    bone and -y.
+    """
+    rest = _rest_motion(motion).contract_joint_positions()[0]
+    if _stands(rest) and _axes_of(rest)[1][1] > 0.82:
+        return None
+    c = motion.contract_joint_positions()                                  # (F, 15, 3)
+    hips = 0.5 * (c[:, C["l_hip"]] + c[:, C["r_hip"]])
+    torso = _unit(c[:, C["neck"]] - hips)[:, 1]
+    legs = np.mean([_unit(c[:, C[b]] - c[:, C[a]])[:, 1] for a, b in
+                    (("l_hip", "l_knee"), ("l_knee", "l_ankle"), ("r_hip", "r_knee"), ("r_knee", "r_ankle"))],
+                   axis=0)
+    return int(np.argmax(torso - legs))
+
+
+def _reference_motion(motion):
+    """``(one-frame motion holding the reference pose, its frame index or None)``."""
+    if "reference" not in motion._cache:
+        f = reference_frame(motion)
+        ref = _rest_motion(motion) if f is None else _one_frame(motion, motion.frames[f])
+        motion._cache["reference"] = (ref, f)
+    return motion._cache["reference"]
+
+
+def _axes_of(points):
+    """``(left, up, forward)`` unit vectors of a standing skeleton's contract points ``(15, 3)``.
+
+    Up from the ankles to the head, left from the hips and the shoulders (made normal
+    to up), forward = left x up.
+    """
+    up = _unit(points[C["head"]] - 0.5 * (points[C["l_ankle"]] + points[C["r_ankle"]]))
+    left = (points[C["l_hip"]] - points[C["r_hip"]]) + (points[C["l_shoulder"]] - points[C["r_shoulder"]])
+    left = _unit(left - (left @ up) * up)
+    return left, up, np.cross(left, up)
+
+
+def _reference_axes(motion) -> np.ndarray:
+    """(3, 3) rotation from the BVH world to the reference pose's own axes (rows left, down, back)."""
+    left, up, forward = _axes_of(_reference_motion(motion)[0].contract_joint_positions()[0])
+    return np.stack([left, -up, -forward])
 
 
 def canonical_axes(motion) -> np.ndarray:
-    """(3, 3) rotation ``B`` from the BVH world to the canonical frame of its rest pose.
+    """(3, 3) rotation ``B`` from the BVH world to a world with our model's axes.
 
-    In the canonical frame the rest skeleton's own left is +x, up is -y and forward
-    is -z, like our model frame. Left is read from the hips and shoulders, up from
-    the ankles to the head.
+    Our model frame has the body's left +x, up -y and forward -z; ``B`` maps the
+    reference pose's left, up and forward there. For a rest-pose reference that is
+    the rest pose's own axes (up from the ankles to the head); for a reference frame
+    of the motion, up is the BVH world's +y (so that the floor stays level) and left
+    the reference's left made horizontal.
     """
-    rest = _rest_motion(motion).contract_joint_positions()[0]
-    up = _unit(rest[C["head"]] - 0.5 * (rest[C["l_ankle"]] + rest[C["r_ankle"]]))
-    left = (rest[C["l_hip"]] - rest[C["r_hip"]]) + (rest[C["l_shoulder"]] - rest[C["r_shoulder"]])
+    ref, frame = _reference_motion(motion)
+    if frame is None:
+        return _reference_axes(motion)
+    left, _, _ = _axes_of(ref.contract_joint_positions()[0])
+    up = np.array([0.0, 1.0, 0.0])
     left = _unit(left - (left @ up) * up)
-    forward = np.cross(left, up)
-    return np.stack([left, -up, -forward])
+    return np.stack([left, -up, -np.cross(left, up)])
 
 
 def rest_span(points) -> float:
@@ -136,13 +203,13 @@ def rest_span(points) -> float:
 
 
 def subject_height(motion, body) -> float:
-    """The BVH subject's standing height, metres, estimated from its rest skeleton.
+    """The BVH subject's standing height, metres, estimated from its reference pose.
 
-    The ankle-to-head-centre span of the BVH rest pose, scaled by the ratio of our
+    The ankle-to-head-centre span of the BVH reference pose (:func:`reference_frame`), scaled by the ratio of our
     body's height to its own span (the share of height below the ankle and above
     the head centre is taken from our body's proportions).
     """
-    bvh_span = rest_span(_rest_motion(motion).contract_joint_positions()[0])
+    bvh_span = rest_span(_reference_motion(motion)[0].contract_joint_positions()[0])
     ours = np.asarray(body.joint_positions(np.zeros(body.dof)))
     return float(body.height) * bvh_span / rest_span(ours)
 
@@ -161,13 +228,6 @@ def _chest_joint(motion) -> int:
     common = [j for j in chains[0] if j in chains[1] and j in chains[2]]
     # chains list a joint before its ancestors, so the first common one is the lowest.
     return common[0]
-
-
-def _driver_index(motion, names):
-    for n in names:
-        if motion.has_joint(n):
-            return motion.joint_index(n)
-    raise KeyError(names)
 
 
 def retarget(motion, body, world_to_camera=None, scale=None) -> np.ndarray:
@@ -199,17 +259,25 @@ def retarget(motion, body, world_to_camera=None, scale=None) -> np.ndarray:
     F = motion.n_frames
 
     world = motion.world_transforms()
-    W = np.einsum("ij,fkjl,ml->fkim", B, world[..., :3, :3], B)      # canonical, rest = I
+    rest_motion, frame = _reference_motion(motion)
+    # A (reference) in its own axes A, turned by W_j W_j,ref^T in the BVH world, seen
+    # in our world B: B W_j W_j,ref^T A^T, the identity at the reference when A = B.
+    A = B if frame is None else _reference_axes(motion)
+    rel = world[..., :3, :3]
+    if frame is not None:
+        rel = rel @ np.swapaxes(world[frame, :, :3, :3], -1, -2)
+    W = np.einsum("ij,fkjl,ml->fkim", B, rel, A)
     contract = motion.contract_joint_positions() @ B.T                 # (F, 15, 3) canonical
-    rest_motion = _rest_motion(motion)
-    rest_contract = rest_motion.contract_joint_positions()[0] @ B.T
-    rest_joints = rest_motion.joint_positions()[0] @ B.T
+    rest_contract = rest_motion.contract_joint_positions()[0] @ A.T
+    rest_joints = rest_motion.joint_positions()[0] @ A.T
+    rest_ends = rest_motion.end_site_positions()[0] @ A.T if len(motion.end_site_parents) else None
     ours_rest = np.asarray(body.joint_positions(np.zeros(body.dof)))   # contract order
     offsets = np.asarray(body.offsets, float)
 
+    mapping = motion.contract_joint_indices()
     G = np.empty((F, J, 3, 3))
     for j, name in enumerate(names):
-        drivers, bone = _DRIVERS[name]
+        bone = _BONES[name]
         if name == "spine":
             chest = _chest_joint(motion)
             # Fit the chest's three bones (to the neck and both shoulders) at rest.
@@ -220,7 +288,7 @@ def retarget(motion, body, world_to_camera=None, scale=None) -> np.ndarray:
             K = best_rotation(_unit(ours), _unit(theirs))
             G[:, j] = W[:, chest] @ K
             continue
-        d = _driver_index(motion, drivers)
+        d = mapping[name][1]
         if bone is not None:
             ours_dir = ours_rest[C[bone[1]]] - ours_rest[C[bone[0]]]
             their_rest = rest_contract[C[bone[1]]] - rest_contract[C[bone[0]]]
@@ -236,7 +304,7 @@ def retarget(motion, body, world_to_camera=None, scale=None) -> np.ndarray:
             if kids:
                 their = rest_joints[kids[0]] - rest_joints[d]
             elif len(ends):
-                their = motion.end_site_offsets[ends[0]] @ B.T
+                their = rest_ends[ends[0]] - rest_joints[d]
             else:
                 their = rest_joints[d] - rest_joints[motion.parents[d]]
             if np.linalg.norm(their) < 1e-9:

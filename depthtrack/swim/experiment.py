@@ -291,7 +291,7 @@ class SwimSetup:
 def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int = 100,
             smooth_sigma: float = 2.0, derivative: str = "taylor3", temporal_sigma=None,
             train_starts=None, side: str = "right", units=None, test_start: int | None = None,
-            stroke: str = "back") -> SwimSetup:
+            stroke: str = "back", joint_map=None) -> SwimSetup:
     """Load the takes, split, train the model, estimate its process noise and cut the test window.
 
     ``test_start`` (a frame of the test take) places the test window there; with the
@@ -301,9 +301,9 @@ def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int
 
     if frames < 1 or step < 1:
         raise InputError(None, "--frames and --step must be positive")
-    train = load_swim_mocap(train_path, units)
+    train = load_swim_mocap(train_path, units, joint_map)
     same = Path(test_path).resolve() == Path(train_path).resolve()
-    test = train if same else load_swim_mocap(test_path, units)
+    test = train if same else load_swim_mocap(test_path, units, joint_map)
     exclude = None
     if test_start is None:
         last_train, first, test_starts = plan_split(train, test, frames, step, side, stroke)

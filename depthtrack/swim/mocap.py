@@ -62,8 +62,11 @@ class SwimMocap:
         return len(self.joints)
 
 
-def load_swim_mocap(path, units=None) -> SwimMocap:
+def load_swim_mocap(path, units=None, joint_map=None) -> SwimMocap:
     """Read a BVH with :func:`depthtrack.io.bvh.read_bvh` and extract the stick figure.
+
+    ``joint_map`` (``{our joint: file joint}`` or a JSON file) names joints that the
+    BVH reader's naming conventions do not find (``--joint-map``).
 
     Raises
     ------
@@ -75,7 +78,7 @@ def load_swim_mocap(path, units=None) -> SwimMocap:
     path = Path(path)
     if not path.is_file():
         raise InputError(path, "no such BVH file")
-    motion = read_bvh(path, units=units)
+    motion = read_bvh(path, units=units, joint_map=joint_map)
     if motion.n_frames < 2:
         raise InputError(path, "BVH has fewer than 2 frames")
     joints = stick_figure_from_contract(motion.contract_joint_positions())

@@ -42,7 +42,7 @@ def ground_truth(body, poses, vertices):
 
 def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=None, azimuth=0.0,
                camera_height=None, noise="tof", seed=0, depth_scale=0.001, source=None,
-               quiet=True, renderer=None, subject=None) -> dict:
+               quiet=True, renderer=None, subject=None, pitch=None) -> dict:
     """Render, add noise and write a synthetic sequence.
 
     Parameters
@@ -56,6 +56,8 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
     camera : str or Camera
         A preset name from :data:`depthtrack.camera.CAMERA_PRESETS` or intrinsics.
     distance, azimuth, camera_height : see :func:`depthtrack.synth.scene.place_camera`.
+    pitch : float or None
+        Downward tilt of the camera in degrees (``place_camera``'s ``pitch_deg``).
     noise : {"tof", "none"} or ToFNoise
     seed : int
         Seeds the noise generator.
@@ -86,7 +88,7 @@ def synthesize(out, body, world_poses, fps: float, camera="sr4000", distance=Non
     else:
         noise_model = noise
     placement = place_camera(cam, body, world_poses, distance=distance, azimuth_deg=azimuth,
-                             height=camera_height,
+                             height=camera_height, pitch_deg=pitch,
                              max_depth=noise_model.max_range if noise_model is not None else np.inf)
     poses = transform_poses(world_poses, placement.world_to_camera)
     meshes = scene_meshes(placement)
@@ -150,7 +152,7 @@ def _window(poses, fps, start, seconds, path=None):
 def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                    distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0, units=None,
                    camera_height=None, quiet=True, body=None, skip_leading_jump=True,
-                   subject=None) -> dict:
+                   subject=None, joint_map=None, pitch=None) -> dict:
     """Synthesize a sequence from a BVH file (see :func:`synthesize`).
 
     The motion is retargeted onto the default body of the given height (full mesh),
@@ -158,12 +160,15 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
     ``skip_leading_jump``, frames the motion teleports out of at its start
     (:meth:`BvhMotion.leading_jump`, e.g. CMU's calibration T-pose) are dropped first and
     ``start`` counts from the frame after them; ``sequence.json`` records how many.
+    ``joint_map`` (``{our joint: file joint}`` or a JSON file) names joints the BVH
+    reader's naming conventions do not find.
     """
     from ..body import BodyModel
     from ..io.bvh import read_bvh
     from ..motion.retarget import canonical_axes, resample_poses, retarget, subject_height
 
-    motion = read_bvh(motion_path, units=units)
+    motion = read_bvh(motion_path, units=units, joint_map=joint_map)
+    motion.contract_joint_indices()     # refuse a skeleton we cannot map before any work
     body = BodyModel.default(height=height, mesh="full") if body is None else body
     to_world = np.eye(4)
     to_world[:3, :3] = canonical_axes(motion)     # BVH world -> y-down world facing like the rest pose
@@ -178,6 +183,7 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
     source = {"kind": "bvh", "file": os.path.basename(os.fspath(motion_path)),
               "units_m": motion.units_m, "units_source": motion.units_source,
               "frames": motion.n_frames, "fps": round(motion.fps, 6),
+              "joint_names": motion.convention(), "joint_map": motion.joint_map,
               "skipped_leading_frames": skipped,
               "skipped_because": ("the motion jumps out of them faster than a body moves "
                                   "(a calibration pose)") if skipped else None,
@@ -187,12 +193,12 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
                            "root_scale": round(scale, 6)}}
     return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
                       camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
-                      subject=subject)
+                      subject=subject, pitch=pitch)
 
 
 def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
                           distance=None, azimuth=0.0, height=1.75, noise="tof", seed=0,
-                          camera_height=None, quiet=True, body=None, subject=None) -> dict:
+                          camera_height=None, quiet=True, body=None, subject=None, pitch=None) -> dict:
     """Synthesize a sequence from a built-in motion (see :mod:`depthtrack.synth.procedural`)."""
     from ..body import BodyModel
     from .procedural import PROCEDURAL_MOTIONS, procedural_motion
@@ -207,4 +213,4 @@ def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="
               "seconds": None if seconds is None else float(seconds)}
     return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
                       camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
-                      subject=subject)
+                      subject=subject, pitch=pitch)

@@ -136,7 +136,7 @@ def _fraction_in_view(camera, points, margin=2.0, max_depth=np.inf):
 
 def place_camera(camera, body, poses, distance=None, azimuth_deg=0.0, height=None,
                  min_distance=2.5, max_distance=12.0, step=0.25, sample=40,
-                 max_depth=np.inf) -> Placement:
+                 max_depth=np.inf, pitch_deg=None) -> Placement:
     """Choose the camera pose for a world-frame pose sequence.
 
     The camera looks along the reverse of the subject's initial heading (turned by
@@ -160,6 +160,9 @@ def place_camera(camera, body, poses, distance=None, azimuth_deg=0.0, height=Non
         Camera height above the floor; ``None`` = 0.72 x body height (chest).
     max_depth : float
         The sensor's range: a frame with body surface beyond it is not "in view".
+    pitch_deg : float or None
+        Downward tilt of the optical axis from horizontal (negative: upward); ``None``
+        = aim at the middle of the body.
     """
     poses = np.asarray(poses, float)
     H = float(body.height)
@@ -178,7 +181,11 @@ def place_camera(camera, body, poses, distance=None, azimuth_deg=0.0, height=Non
 
     def build(d):
         position = centre + heading * d - _DOWN * cam_height
-        T = look_from(position, target)
+        if pitch_deg is None:
+            T = look_from(position, target)
+        else:
+            p = np.radians(float(pitch_deg))
+            T = look_from(position, position - np.cos(p) * heading + np.sin(p) * _DOWN)
         pts = verts @ T[:3, :3].T + T[:3, 3]
         return T, position, _fraction_in_view(camera, pts, max_depth=max_depth)
 

@@ -1,0 +1,58 @@
+"""tools/benchmark.py: which motions, which commands, and the statistics over seeds."""
+import importlib.util
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def tool():
+    spec = importlib.util.spec_from_file_location("benchmark", REPO / "tools" / "benchmark.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_splits_are_disjoint_and_quick_takes_mocap_and_procedural(tool, tmp_path):
+    dev, test = tool.split_motions("dev", tmp_path), tool.split_motions("test", tmp_path)
+    assert not {m[0] for m in dev} & {m[0] for m in test}
+    split = json.loads((REPO / "depthtrack" / "data" / "motion_split.json").read_text())
+    assert [m[2] for m in test if m[1] == "bvh"] == [str(tmp_path / p) for p in split["test"]]
+    quick = tool.quick_subset(test, 3)
+    assert [m[1] for m in quick] == ["bvh", "bvh", "procedural"]
+
+
+def test_synth_command_carries_the_condition(tool, tmp_path):
+    cond = {"camera": "kinect-v2", "azimuth": 45, "camera_height": 2.2, "pitch": 20}
+    cmd = tool.synth_command("procedural", "spin", tmp_path / "s", 1.5, 2.0, cond, 3)
+    text = " ".join(cmd)
+    for part in ("--procedural spin", "--camera kinect-v2", "--azimuth 45", "--camera-height 2.2",
+                 "--pitch 20", "--seed 3", "--start 1.5", "--seconds 2", "--noise tof"):
+        assert part in text
+
+
+def test_busiest_window_finds_the_motion(tool):
+    # lie-down stands still for its first 15 % (1.5 s): the busiest 2 s start later
+    assert tool.busiest_window("procedural", "lie-down", 2.0) >= 1.0
+
+
+def test_mean_and_spread_over_seeds(tool):
+    def seq(motion, seed_index, within):
+        m = {"within_10cm": within, "mean_error_m": 0.1 - within / 10, "max_error_m": 0.2,
+             "marker_mean_error_m": None, "fps": 2.0 + seed_index, "frames": 50}
+        return {"motion": motion, "condition_label": "sr4000, az 0", "seed": seed_index + 1,
+                "seed_index": seed_index, "metrics": {"hc+ep": m}}
+
+    sequences = [seq("a", 0, 0.9), seq("a", 1, 0.7), seq("b", 0, 0.5), seq("b", 1, 0.3)]
+    groups, overall = tool.aggregate(sequences, ["hc+ep"])
+    a = groups[0]["methods"]["hc+ep"]["within_10cm"]
+    assert a["mean"] == pytest.approx(0.8) and a["std"] == pytest.approx(0.1) and a["n"] == 2
+    o = overall["hc+ep"]
+    # per seed: (0.9 + 0.5) / 2 = 0.7 and (0.7 + 0.3) / 2 = 0.5 -> 0.6 +- 0.1
+    assert o["within_10cm"]["mean"] == pytest.approx(0.6) and o["within_10cm"]["std"] == pytest.approx(0.1)
+    assert o["worst_group_within_10cm"] == pytest.approx(0.4) and o["fps_min"] == 2.0
+    assert o["marker_mean_error_m"]["mean"] is None

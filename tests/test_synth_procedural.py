@@ -1,0 +1,54 @@
+"""The built-in motions of the held-out benchmark, and their train / dev / test split."""
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.contract import JOINT_INDEX as C
+from depthtrack.synth.procedural import PROCEDURAL_MOTIONS, PROCEDURAL_SPLIT, procedural_motion
+
+
+@pytest.fixture(scope="module")
+def body():
+    return BodyModel.default(mesh="decimated")
+
+
+def test_every_motion_in_exactly_one_split():
+    names = [n for split in ("train", "dev", "test") for n in PROCEDURAL_SPLIT[split]]
+    assert sorted(names) == sorted(PROCEDURAL_MOTIONS) and len(names) == len(set(names))
+
+
+def test_spins_turn_in_place_at_their_speeds(body):
+    for name, turns in (("spin-slow", 1), ("spin", 2), ("spin-fast", 3)):
+        poses = procedural_motion(name, body, 25.0)
+        assert poses[-1, 4] == pytest.approx(2 * np.pi * turns)          # pelvis_ry: turns about the vertical
+        assert np.abs(poses[:, [0, 2]]).max() < 1e-9                       # in place
+
+
+def test_benchmark_motions_rest_on_the_floor(body):
+    rest = np.asarray(body.posed_vertices(np.zeros((1, body.dof))))[0, :, 1].max()
+    for name in ("bend", "squat-deep", "lie-down", "overhead", "sidestep", "walk-back"):
+        poses = procedural_motion(name, body, 10.0)
+        assert np.all(np.isfinite(poses))
+        assert np.abs(np.diff(poses, axis=0)[:, 3:]).max() < 0.5            # smooth at 10 fps
+        lowest = np.asarray(body.posed_vertices(poses))[..., 1].max(axis=1)
+        np.testing.assert_allclose(lowest, rest, atol=1e-9)
+        joints = body.joint_positions(poses)
+        if name == "lie-down":          # lying flat: the head near the floor (y down), halfway through
+            mid = joints[len(joints) // 2]
+            assert rest - mid[C["head"], 1] < 0.3 and rest - joints[0, C["head"], 1] > 1.4
+        if name == "sidestep":          # to the subject's left (+x) and back
+            assert joints[:, C["pelvis"], 0].max() > 1.0 and abs(joints[-1, C["pelvis"], 0]) < 0.1
+        if name == "walk-back":         # away from where it faces (it faces -z)
+            assert joints[:, C["pelvis"], 2].max() > 0.8
+
+
+def test_camera_pitch_and_height_are_honoured(body):
+    from depthtrack.camera import Camera
+    from depthtrack.synth.scene import place_camera
+
+    poses = procedural_motion("spin", body, 5.0)
+    default = place_camera(Camera.preset("sr4000"), body, poses)
+    high = place_camera(Camera.preset("sr4000"), body, poses, height=2.2, pitch_deg=20.0, azimuth_deg=135.0)
+    assert high.pitch_deg == pytest.approx(20.0) and high.height == pytest.approx(2.2)
+    assert 0 < default.pitch_deg < 15                 # aimed at the middle of the body from chest height
+    assert high.in_view == 1.0                        # backed off until the whole body is in view

@@ -1,0 +1,340 @@
+#!/usr/bin/env python
+"""The held-out tracking benchmark: synthesize sequences from one split's motions, track, report.
+
+Usage::
+
+    .venv/bin/python tools/benchmark.py --split dev  [--quick] [--out benchmark-output]
+    .venv/bin/python tools/benchmark.py --split test [--quick]
+
+For every motion of the split (the mocap clips of ``depthtrack/data/motion_split.json``
+under ``--data``, and the procedural motions of
+``depthtrack.synth.procedural.PROCEDURAL_SPLIT``) and every viewing condition (camera,
+azimuth, distance, camera height and pitch) it synthesizes one sequence per noise seed
+with ``depthtrack synth`` (ToF noise, 25 fps, the window of ``--seconds`` in which the
+motion moves most), tracks and scores it with ``depthtrack eval`` (``--methods``), and
+writes ``OUT/SPLIT/report.md`` and ``OUT/SPLIT/report.json``: per sequence, per motion
+and condition the mean and spread (standard deviation) over the seeds, and overall (the
+mean over motion-condition groups, each weighing the same, and its spread over the seeds),
+with every command line that made them.
+
+Presets: ``--quick`` takes three motions of the split (two mocap clips and one procedural
+motion), one condition each (SR4000 from the front, Kinect v2 from 120 degrees, Azure
+NFOV from 240 degrees), three seeds, 2 s clips and ``hc+ep`` only: a few minutes on two
+cores. The full preset (default) takes every motion of the split under six conditions
+(the three cameras from all round, a high camera looking down, a far one), three seeds,
+4 s clips, ``hc+ep`` and ``hc``. Held out means held out: tune on dev; a setting changed
+after looking at a test figure turns that figure into a dev figure.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import shlex
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from depthtrack.io.atomic import write_text_atomic  # noqa: E402
+
+SPLIT_FILE = REPO / "depthtrack" / "data" / "motion_split.json"
+FPS = 25.0
+
+#: Viewing conditions: camera preset, azimuth (deg), and optional distance (m), camera
+#: height (m) and pitch (deg, down); None = the synthesizer's default placement.
+CONDITIONS_FULL = [
+    {"camera": "sr4000", "azimuth": 0},
+    {"camera": "kinect-v2", "azimuth": 90},
+    {"camera": "azure-nfov", "azimuth": 180},
+    {"camera": "sr4000", "azimuth": 270},
+    {"camera": "kinect-v2", "azimuth": 45, "camera_height": 2.2, "pitch": 20},
+    {"camera": "azure-nfov", "azimuth": 315, "distance": 4.0},
+]
+CONDITIONS_QUICK = [
+    {"camera": "sr4000", "azimuth": 0},
+    {"camera": "kinect-v2", "azimuth": 120},
+    {"camera": "azure-nfov", "azimuth": 240},
+]
+PRESETS = {
+    "full": {"seconds": 4.0, "seeds": 3, "methods": "hc+ep,hc", "clips": None},
+    "quick": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep", "clips": 3},
+}
+METRICS = ("within_10cm", "mean_error_m", "max_error_m", "marker_mean_error_m", "fps")
+
+
+def split_motions(split: str, data: Path) -> list:
+    """``[(name, kind, source)]``: the split's mocap clips (kind "bvh") and procedural motions."""
+    from depthtrack.synth.procedural import PROCEDURAL_SPLIT
+
+    table = json.loads(SPLIT_FILE.read_text(encoding="utf-8"))
+    if split not in table:
+        raise SystemExit(f"benchmark: unknown split {split!r}; {SPLIT_FILE.name} has train, dev, test")
+    out = [(Path(rel).stem, "bvh", str(data / rel)) for rel in table[split]]
+    out += [(name, "procedural", name) for name in PROCEDURAL_SPLIT.get(split, [])]
+    return out
+
+
+def quick_subset(motions: list, n: int) -> list:
+    """``n`` motions spread over the list: ``n - 1`` mocap clips and one procedural motion."""
+    bvh = [m for m in motions if m[1] == "bvh"]
+    proc = [m for m in motions if m[1] == "procedural"]
+    k = max(1, n - (1 if proc else 0))
+    picked = [bvh[i] for i in np.linspace(0, len(bvh) - 1, min(k, len(bvh))).round().astype(int)] if bvh else []
+    return picked + proc[:n - len(picked)]
+
+
+def busiest_window(kind: str, source: str, seconds: float) -> float:
+    """Start (s, after any calibration frames synth drops) of the ``seconds`` in which the joints move most.
+
+    Chosen from the motion alone (joint speeds), never from tracking results.
+    """
+    if kind == "bvh":
+        from depthtrack.io.bvh import read_bvh
+
+        motion = read_bvh(source)
+        skip = motion.leading_jump()
+        step = max(1, int(round(motion.fps / 10.0)))
+        joints = motion.contract_joint_positions()[skip::step]
+        rate = motion.fps / step
+    else:
+        from depthtrack.body import BodyModel
+        from depthtrack.synth.procedural import procedural_motion
+
+        body = BodyModel.default(mesh="decimated")
+        rate = 10.0
+        joints = body.joint_positions(procedural_motion(source, body, rate))
+    speed = np.linalg.norm(np.diff(joints, axis=0), axis=-1).sum(axis=1)        # (F - 1,)
+    width = max(1, int(round(seconds * rate)))
+    if len(speed) <= width:
+        return 0.0
+    sums = np.convolve(speed, np.ones(width), mode="valid")
+    return round(float(np.argmax(sums)) / rate, 2)
+
+
+def synth_command(kind, source, out, start, seconds, condition, seed) -> list:
+    cmd = ["depthtrack", "synth"]
+    cmd += [shown(source), shown(out)] if kind == "bvh" else ["--procedural", source, shown(out)]
+    cmd += ["--fps", f"{FPS:g}", "--start", f"{start:g}", "--seconds", f"{seconds:g}",
+            "--camera", condition["camera"], "--azimuth", f"{condition['azimuth']:g}"]
+    for key, flag in (("distance", "--distance"), ("camera_height", "--camera-height"), ("pitch", "--pitch")):
+        if key in condition:
+            cmd += [flag, f"{condition[key]:g}"]
+    return cmd + ["--noise", "tof", "--seed", str(seed), "--quiet"]
+
+
+def shown(path) -> str:
+    """A path as the report shows it: relative to the repository root (where the commands run) when near."""
+    rel = os.path.relpath(path, REPO)
+    return str(path) if rel.startswith(os.path.join("..", "..")) else rel
+
+
+def run_depthtrack(cmd: list) -> str:
+    """Run a ``depthtrack ...`` command line with this checkout's package; returns stdout."""
+    env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    done = subprocess.run([sys.executable, "-m", "depthtrack", *cmd[1:]], cwd=REPO, env=env,
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"benchmark: {shlex.join(cmd)} failed ({done.returncode}): {done.stderr.strip()[-500:]}")
+    return done.stdout
+
+
+def condition_label(c: dict) -> str:
+    parts = [c["camera"], f"az {c['azimuth']:g}"]
+    if "distance" in c:
+        parts.append(f"{c['distance']:g} m")
+    if "camera_height" in c:
+        parts.append(f"h {c['camera_height']:g} m")
+    if "pitch" in c:
+        parts.append(f"pitch {c['pitch']:g}")
+    return ", ".join(parts)
+
+
+def _stats(values) -> dict:
+    v = np.array([x for x in values if x is not None], float)
+    if len(v) == 0:
+        return {"mean": None, "std": None, "n": 0}
+    return {"mean": float(v.mean()), "std": float(v.std()), "n": int(len(v))}
+
+
+def aggregate(sequences: list, methods: list) -> tuple:
+    """Per (motion, condition) group and overall statistics over seeds."""
+    groups = {}
+    for s in sequences:
+        groups.setdefault((s["motion"], s["condition_label"]), []).append(s)
+    rows = []
+    for (motion, label), items in groups.items():
+        row = {"motion": motion, "condition": label, "seeds": [s["seed"] for s in items], "methods": {}}
+        for m in methods:
+            row["methods"][m] = {k: _stats(s["metrics"][m].get(k) for s in items) for k in METRICS}
+            row["methods"][m]["fps_min"] = min(s["metrics"][m]["fps"] for s in items)
+        rows.append(row)
+    overall = {}
+    for m in methods:
+        # Overall per seed index (the mean over groups), then mean and spread over seeds.
+        by_seed = {}
+        for s in sequences:
+            by_seed.setdefault(s["seed_index"], []).append(s["metrics"][m])
+        stats = {}
+        for k in METRICS:
+            known = [[x[k] for x in xs if x.get(k) is not None] for xs in by_seed.values()]
+            stats[k] = _stats(float(np.mean(v)) for v in known if v)
+        group_means = [r["methods"][m]["within_10cm"]["mean"] for r in rows]
+        stats["worst_group_within_10cm"] = min(group_means)
+        stats["fps_min"] = min(r["methods"][m]["fps_min"] for r in rows)
+        overall[m] = stats
+    return rows, overall
+
+
+def _pct(s):
+    return "-" if s["mean"] is None else f"{100 * s['mean']:.0f} ± {100 * s['std']:.0f}%"
+
+
+def _cm(s):
+    return "-" if s["mean"] is None else f"{100 * s['mean']:.1f} ± {100 * s['std']:.1f}"
+
+
+def markdown(report: dict) -> str:
+    methods = report["methods"]
+    out = [f"# Held-out benchmark: {report['split']} split ({report['preset']} preset)", "",
+           f"{report['date']}, {report['machine']}, commit {report['commit']}; "
+           f"{report['seconds']:g} s clips at {FPS:g} fps, ToF noise, seeds {report['seeds']}; "
+           f"{report['wall_s']:.0f} s wall.", "",
+           "Motions: " + ", ".join(f"`{m['name']}` ({m['kind']}, start {m['start_s']:g} s)"
+                                   for m in report["motions"]), "",
+           "## Overall (each motion-condition group weighs the same; ± = spread over seeds)", "",
+           "| method | within 10 cm | mean error (cm) | max error (cm) | marker avg (cm) | fps (mean) | "
+           "worst group within 10 cm | slowest sequence fps |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for m in methods:
+        o = report["overall"][m]
+        out.append(f"| {m} | {_pct(o['within_10cm'])} | {_cm(o['mean_error_m'])} | {_cm(o['max_error_m'])} | "
+                   f"{_cm(o['marker_mean_error_m'])} | {o['fps']['mean']:.2f} | "
+                   f"{100 * o['worst_group_within_10cm']:.0f}% | {o['fps_min']:.2f} |")
+    out += ["", "## Per motion and condition (mean ± spread over seeds)", "",
+            "| motion | condition | method | within 10 cm | mean error (cm) | max error (cm) | slowest fps |",
+            "|---|---|---|---:|---:|---:|---:|"]
+    for r in report["groups"]:
+        for m in methods:
+            g = r["methods"][m]
+            out.append(f"| {r['motion']} | {r['condition']} | {m} | {_pct(g['within_10cm'])} | "
+                       f"{_cm(g['mean_error_m'])} | {_cm(g['max_error_m'])} | {g['fps_min']:.2f} |")
+    out += ["", "## Per sequence", "", "| sequence | method | frames | within 10 cm | mean error (cm) | fps |",
+            "|---|---|---:|---:|---:|---:|"]
+    for s in report["sequences"]:
+        for m in methods:
+            x = s["metrics"][m]
+            out.append(f"| {s['name']} | {m} | {x['frames']} | {100 * x['within_10cm']:.0f}% | "
+                       f"{100 * x['mean_error_m']:.1f} | {x['fps']:.2f} |")
+    out += ["", "## Commands", "", "```", report["command"]]
+    for s in report["sequences"]:
+        out.append(s["synth_command"])
+        if s is report["sequences"][-1] or report["sequences"][report["sequences"].index(s) + 1]["eval_command"] \
+                != s["eval_command"]:
+            out.append(s["eval_command"])
+    out += ["```", ""]
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog="examples:\n  tools/benchmark.py --split dev --quick\n"
+                                            "  tools/benchmark.py --split test --out benchmark-output")
+    parser.add_argument("--split", default="test", help="dev or test (or train) (default test)")
+    parser.add_argument("--quick", action="store_true", help="the quick preset (minutes; see above)")
+    parser.add_argument("--data", default=str(REPO.parent / "shared" / "data"),
+                        help="where the split's mocap clips are (default ../shared/data)")
+    parser.add_argument("--out", default="benchmark-output", help="output folder (default benchmark-output)")
+    parser.add_argument("--seconds", type=float, default=None, help="clip length (preset: 4, quick 2)")
+    parser.add_argument("--seeds", type=int, default=None, help="noise seeds per condition (preset 3)")
+    parser.add_argument("--methods", default=None, help="tracking methods (preset hc+ep,hc; quick hc+ep)")
+    parser.add_argument("--motions", default=None, help="comma-separated motion names of the split to run")
+    args = parser.parse_args(argv)
+
+    preset_name = "quick" if args.quick else "full"
+    preset = dict(PRESETS[preset_name])
+    seconds = args.seconds or preset["seconds"]
+    n_seeds = args.seeds or preset["seeds"]
+    methods = (args.methods or preset["methods"]).split(",")
+    if n_seeds < 1 or seconds <= 0:
+        print("benchmark: --seeds and --seconds must be positive", file=sys.stderr)
+        return 2
+    data = Path(args.data).resolve()
+    motions = split_motions(args.split, data)
+    missing = [src for _, kind, src in motions if kind == "bvh" and not Path(src).is_file()]
+    if missing:
+        print(f"benchmark: motion clips not found: {', '.join(missing)}", file=sys.stderr)
+        return 2
+    if args.motions:
+        wanted = args.motions.split(",")
+        motions = [m for m in motions if m[0] in wanted]
+    elif preset["clips"]:
+        motions = quick_subset(motions, preset["clips"])
+    conditions = CONDITIONS_QUICK if args.quick else CONDITIONS_FULL
+    out = Path(args.out).resolve() / args.split
+    seq_dir = out / "sequences"
+    seeds = list(range(1, n_seeds + 1))
+    command = "tools/benchmark.py " + shlex.join(argv if argv is not None else sys.argv[1:])
+
+    t0 = time.perf_counter()
+    plan = []
+    for i, (name, kind, source) in enumerate(motions):
+        start = busiest_window(kind, source, seconds)
+        # quick: one condition per motion, in turn; full: every condition
+        conds = [conditions[i % len(conditions)]] if args.quick else conditions
+        plan.append((name, kind, source, start, conds))
+    total = sum(len(p[4]) for p in plan) * len(seeds)
+    sequences, done = [], 0
+    for name, kind, source, start, conds in plan:
+        for cond in conds:
+            # One synth per seed, one eval for the seeds together (fewer process starts).
+            group = []
+            for s_index, seed in enumerate(seeds):
+                seq_name = f"{name}_c{conditions.index(cond)}_s{seed}"
+                path = seq_dir / seq_name
+                synth = synth_command(kind, source, path, start, seconds, cond, seed)
+                run_depthtrack(synth)
+                group.append((seq_name, path, synth, seed, s_index))
+            evaluate = ["depthtrack", "eval", *[shown(g[1]) for g in group], "--methods", ",".join(methods),
+                        "--json", "--quiet"]
+            result = json.loads(run_depthtrack(evaluate))["sequences"]
+            for seq_name, path, synth, seed, s_index in group:
+                metrics = {m: result[seq_name][m] for m in methods}
+                done += 1
+                print(f"[{done}/{total}] {seq_name}: " + ", ".join(
+                    f"{m} {100 * metrics[m]['within_10cm']:.0f}% within 10 cm, {metrics[m]['fps']:.2f} fps"
+                    for m in methods), file=sys.stderr, flush=True)
+                sequences.append({"name": seq_name, "motion": name, "kind": kind, "source": source,
+                                  "condition": cond, "condition_label": condition_label(cond),
+                                  "seed": seed, "seed_index": s_index, "start_s": start,
+                                  "synth_command": shlex.join(synth), "eval_command": shlex.join(evaluate),
+                                  "metrics": metrics})
+    groups, overall = aggregate(sequences, methods)
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True,
+                                text=True).stdout.strip() or "unknown"
+    except OSError:
+        commit = "unknown"
+    report = {
+        "format": "depthtrack-benchmark/1", "split": args.split, "preset": preset_name,
+        "command": command, "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "machine": f"{os.cpu_count()} CPUs", "commit": commit, "seconds": seconds, "fps": FPS,
+        "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0,
+        "motions": [{"name": n, "kind": k, "source": s, "start_s": st} for n, k, s, st, _ in plan],
+        "conditions": conditions, "sequences": sequences, "groups": groups, "overall": overall,
+    }
+    write_text_atomic(out / "report.json", json.dumps(report, indent=1) + "\n")
+    write_text_atomic(out / "report.md", markdown(report))
+    print(f"benchmark: {out / 'report.md'}, {out / 'report.json'}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
