@@ -46,7 +46,7 @@ from depthtrack.body.rotations import quat_to_matrix, rotation_about  # noqa: E4
 from depthtrack.camera import Camera  # noqa: E402
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.detect.features import depth_features, probe_image, sample_offsets  # noqa: E402
-from depthtrack.detect.recognizer import PartForest, default_path, joint_proposals, recognize  # noqa: E402
+from depthtrack.detect.recognizer import PartForest, Trees, default_path, joint_proposals, recognize  # noqa: E402
 from depthtrack.detect.recognizer_parts import BODY_PARTS, NUM_PARTS  # noqa: E402
 from depthtrack.progress import Progress  # noqa: E402
 from depthtrack.synth.noise import ToFNoise  # noqa: E402
@@ -133,7 +133,7 @@ class FrameSource:
         """(camera name, Camera, SceneFrame, upright)."""
         rng = self.rng
         name, poses = self.motions[rng.integers(len(self.motions))]
-        body = self.bodies[rng.integers(len(self.bodies))]
+        self.body = body = self.bodies[rng.integers(len(self.bodies))]
         pose = poses[rng.integers(len(poses))]
         if rng.random() < self.perturb_fraction:
             pose = perturb(body, pose, rng, scale=rng.uniform(0.5, 1.5))
@@ -164,8 +164,25 @@ def sample_pixels(labels, mask, count, rng):
     return np.stack([rows[pick], cols[pick]], axis=1)
 
 
+def body_axes(body, pose) -> np.ndarray:
+    """(3, 3) columns ``forward, up, left`` of the pelvis (camera frame): where the body faces."""
+    R = np.asarray(body.world_transforms(pose))[0, :3, :3]
+    forward, up = R @ [0.0, 0.0, -1.0], R @ [0.0, -1.0, 0.0]
+    return np.column_stack([forward, up, np.cross(up, forward)])
+
+
+def person_points(depth, mask, camera, rows, cols):
+    """(N, 3) camera-frame points of pixels, and the centre (3,) of all the mask's points."""
+    pts = camera.backproject(depth[rows, cols], np.stack([cols, rows], axis=1).astype(float))
+    r, c = np.nonzero(mask & (depth > 0))
+    centre = camera.backproject(depth[r, c], np.stack([c, r], axis=1).astype(float)).mean(axis=0)
+    return pts.astype(np.float32), centre
+
+
 def make_training_set(source, n_frames, offsets, per_frame, quiet):
-    X, y = [], []
+    """Sampled pixels: features (N, K) float16, parts (N,), points (N, 3), frame index (N,);
+    per frame: true body axes (F, 3, 3) and the person's centre (F, 3)."""
+    X, y, P, fid, axes, centres = [], [], [], [], [], []
     with Progress(n_frames, "training frames", quiet=quiet) as progress:
         for _ in range(n_frames):
             _, camera, frame, _ = source.frame()
@@ -174,43 +191,107 @@ def make_training_set(source, n_frames, offsets, per_frame, quiet):
                 image = probe_image(frame.depth, frame.mask)
                 X.append(depth_features(image, px, offsets, camera.fx, camera.fy).astype(np.float16))
                 y.append(frame.labels[px[:, 0], px[:, 1]])
+                pts, centre = person_points(frame.depth, frame.mask, camera, px[:, 0], px[:, 1])
+                P.append(pts)
+                fid.append(np.full(len(px), len(axes)))
+                axes.append(body_axes(source.body, frame.pose))
+                centres.append(centre)
             progress.update()
-    return np.vstack(X), np.concatenate(y)
+    return dict(X=np.vstack(X), y=np.concatenate(y), P=np.vstack(P), frame=np.concatenate(fid),
+                axes=np.array(axes), centres=np.array(centres))
 
 
-def export_trees(trees, feature_sets, offsets, push_back, meta) -> PartForest:
-    """Flatten scikit-learn trees (features renumbered into ``offsets``) into one PartForest."""
+def export_trees(trees, feature_sets, n_offsets, classes=None) -> Trees:
+    """Flatten scikit-learn trees into :class:`Trees`: a tree's feature i is its offset pair
+    ``feature_set[i]``, or extra input ``i - len(feature_set)`` (numbered ``n_offsets + e``)."""
     feature, threshold, left, right, roots, leaves = [], [], [], [], [], []
     base = n_leaves = 0
     for tree, fset in zip(trees, feature_sets):
         t = tree.tree_
         is_leaf = t.children_left < 0
         leaf_row = np.cumsum(is_leaf) - 1 + n_leaves
-        value = t.value[:, 0, :]
-        full = np.zeros((t.node_count, NUM_PARTS))
-        full[:, tree.classes_] = value / np.maximum(value.sum(1, keepdims=True), 1e-12)
+        if classes is not None:
+            value = t.value[:, 0, :]
+            full = np.zeros((t.node_count, classes))
+            full[:, tree.classes_] = value / np.maximum(value.sum(1, keepdims=True), 1e-12)
+        else:
+            full = t.value[:, :, 0]
         leaves.append(full[is_leaf])
-        feature.append(np.where(is_leaf, 0, fset[np.maximum(t.feature, 0)]))
+        f = np.maximum(t.feature, 0)
+        mapped = np.where(f < len(fset), fset[np.minimum(f, len(fset) - 1)], n_offsets + f - len(fset))
+        feature.append(np.where(is_leaf, 0, mapped))
         threshold.append(np.where(is_leaf, 0.0, t.threshold))
         left.append(np.where(is_leaf, -1, t.children_left + base))
         right.append(np.where(is_leaf, leaf_row, t.children_right + base))
         roots.append(base)
         base += t.node_count
         n_leaves += int(is_leaf.sum())
-    return PartForest(offsets, np.concatenate(feature), np.concatenate(threshold), np.concatenate(left),
-                      np.concatenate(right), np.array(roots), np.vstack(leaves), push_back, meta)
+    return Trees(np.concatenate(feature), np.concatenate(threshold), np.concatenate(left),
+                 np.concatenate(right), np.array(roots), np.vstack(leaves))
+
+
+def fit_trees(make, X, target, n_trees, candidates, rng, extras=None, label="tree"):
+    """Grow ``n_trees`` scikit-learn trees, each on 60 % of the pixels and 70 % of the offset pairs."""
+    trees, fsets = [], []
+    share = max(1, int(0.7 * candidates))
+    for t in range(n_trees):
+        fset = np.sort(rng.choice(candidates, share, replace=False))
+        rows = rng.random(len(target)) < 0.6
+        inputs = X[rows][:, fset].astype(np.float32)
+        if extras is not None:
+            inputs = np.hstack([inputs, extras[rows]])
+        tree = make(int(rng.integers(1 << 31)))
+        tree.fit(inputs, target[rows])
+        del inputs
+        trees.append(tree)
+        fsets.append(fset)
+        print(f"{label} {t + 1}/{n_trees}: {tree.tree_.node_count} nodes, depth {tree.get_depth()}", file=sys.stderr)
+    return trees, fsets
+
+
+def orientation_errors(forest, source, n_frames, quiet) -> np.ndarray:
+    """(n, 3, 3) rotations ``R_est R_true^T`` of the frame-level axes estimate on fresh frames."""
+    out = []
+    with Progress(n_frames, "orientation frames", quiet=quiet) as progress:
+        for _ in range(n_frames):
+            _, camera, frame, _ = source.frame()
+            rows, cols = np.nonzero(frame.mask)
+            if len(rows):
+                f, u = forest.orientation(probe_image(frame.depth, frame.mask), rows, cols, camera.fx, camera.fy)
+                est = np.column_stack([f, u, np.cross(u, f)])
+                out.append(est @ body_axes(source.body, frame.pose).T)
+            progress.update()
+    return np.array(out)
+
+
+def noisy_extras(data, errors, rng) -> np.ndarray:
+    """(N, 8) body-frame inputs of the training pixels, each frame's true axes turned by an
+    orientation error drawn from those measured (so the part trees learn how far to trust it)."""
+    from depthtrack.detect.features import body_frame_features
+
+    out = np.empty((len(data["y"]), 8), np.float32)
+    for i, (axes, centre) in enumerate(zip(data["axes"], data["centres"])):
+        E = errors[rng.integers(len(errors))]
+        sel = data["frame"] == i
+        out[sel] = body_frame_features(data["P"][sel], centre, E @ axes[:, 0], E @ axes[:, 1])
+    return out
 
 
 def check_export(forest, trees, fsets, offsets, source):
     """The numpy traversal must reproduce scikit-learn's probabilities on a fresh frame."""
+    from depthtrack.detect.features import body_frame_features
+
     _, camera, frame, _ = source.frame()
     rows, cols = np.nonzero(frame.mask)
     image = probe_image(frame.depth, frame.mask)
     X = depth_features(image, np.stack([rows, cols], 1), offsets, camera.fx, camera.fy)
+    pts, centre = person_points(frame.depth, frame.mask, camera, rows, cols)
+    axes = forest.orientation(image, rows, cols, camera.fx, camera.fy)
+    extras = body_frame_features(pts, pts.mean(axis=0), *axes)
     ref = np.zeros((len(rows), NUM_PARTS))
     for tree, fset in zip(trees, fsets):
-        ref[:, tree.classes_] += tree.predict_proba(X[:, fset]) / len(trees)
-    mine = forest.predict(image, rows, cols, camera.fx, camera.fy)
+        ref[:, tree.classes_] += tree.predict_proba(np.hstack([X[:, fset], extras])) / len(trees)
+    mine, _ = forest.predict(image, rows, cols, pts, camera.fx, camera.fy, axes)
     agree = float(np.mean(np.abs(mine - ref).max(1) < 1e-3))
     if agree < 0.999:
         raise RuntimeError(f"exported forest agrees with scikit-learn on only {agree:.1%} of pixels")
@@ -236,6 +317,10 @@ def fit_push_back(forest, source, n_frames, quiet) -> np.ndarray:
 def evaluate(forest, source, n_frames, quiet, label):
     """Per-part precision/recall over person pixels, pixel accuracy, joints with a proposal within 10 cm."""
     confusion = np.zeros((NUM_PARTS, NUM_PARTS), np.int64)
+    facing = np.zeros((2, 2))        # rows: upright, any orientation; forward estimate within 90 deg, frames
+    side = np.zeros((2, 2))          # rows: upright, any orientation; sided pixels on the true side, all sided
+    sides = np.array([n[:2] for n in BODY_PARTS])
+    sided = np.isin(sides, ["l_", "r_"])
     hit_any = np.zeros((2, len(JOINT_NAMES)))       # rows: upright, any orientation
     hit_top = np.zeros((2, len(JOINT_NAMES)))
     frames = np.zeros(2)
@@ -243,9 +328,16 @@ def evaluate(forest, source, n_frames, quiet, label):
     with Progress(n_frames, label, quiet=quiet) as progress:
         for _ in range(n_frames):
             cam_name, camera, frame, upright = source.frame()
-            labels, probs = recognize(frame.depth, frame.mask, camera, forest=forest)
+            rows, cols = np.nonzero(frame.mask)
+            axes = forest.orientation(probe_image(frame.depth, frame.mask), rows, cols, camera.fx, camera.fy)
+            truth = body_axes(source.body, frame.pose)
+            facing[0 if upright else 1] += [axes[0] @ truth[:, 0] > 0, 1]
+            labels, probs = recognize(frame.depth, frame.mask, camera, forest=forest, orientation=axes)
             sel = frame.mask & (frame.labels >= 0) & (labels >= 0)
             np.add.at(confusion, (frame.labels[sel], labels[sel]), 1)
+            t, g = frame.labels[sel], labels[sel]
+            both = sided[t] & sided[g]
+            side[0 if upright else 1] += [np.sum(sides[t[both]] == sides[g[both]]), both.sum()]
             prop = joint_proposals(frame.depth, probs, camera, k=3, forest=forest)
             dist = np.linalg.norm(prop.positions - frame.joints[:, None], axis=2)
             any_hit = np.nanmin(np.where(np.isfinite(dist), dist, np.inf), axis=1) < 0.10
@@ -264,6 +356,10 @@ def evaluate(forest, source, n_frames, quiet, label):
     return {"frames": int(n_frames), "pixel_accuracy": float(tp.sum() / max(confusion.sum(), 1)),
             "precision": dict(zip(BODY_PARTS, precision.round(4).tolist())),
             "recall": dict(zip(BODY_PARTS, recall.round(4).tolist())),
+            "facing_correct_upright": float(facing[0, 0] / max(facing[0, 1], 1)),
+            "facing_correct_rotated": float(facing[1, 0] / max(facing[1, 1], 1)),
+            "left_right_correct_upright": float(side[0, 0] / max(side[0, 1], 1)),
+            "left_right_correct_rotated": float(side[1, 0] / max(side[1, 1], 1)),
             "joint_within_10cm_any_of_3": float(hit_any.sum() / (frames.sum() * len(JOINT_NAMES))),
             "joint_within_10cm_top1": float(hit_top.sum() / (frames.sum() * len(JOINT_NAMES))),
             "upright_within_10cm_any_of_3": float(hit_any[0].sum() / (total[0, 0] * len(JOINT_NAMES))),
@@ -279,7 +375,7 @@ def print_report(results):
     for part in BODY_PARTS:
         print(f"{part:14}" + "".join(f" {results[n]['precision'][part]:12.3f} {results[n]['recall'][part]:12.3f}"
                                      for n in names))
-    for key in ("pixel_accuracy", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
+    for key in ("pixel_accuracy", "facing_correct_upright", "facing_correct_rotated", "left_right_correct_upright", "left_right_correct_rotated", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
                 "upright_within_10cm_any_of_3", "rotated_within_10cm_any_of_3"):
         print(f"{key:32}" + "".join(f" {results[n][key]:10.3f} ({n})" for n in names))
     print("per joint, a proposal (of 3) within 10 cm:")
@@ -294,11 +390,15 @@ def main(argv=None):
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog="example: nice -n 10 .venv/bin/python tools/train_recognizer.py --seed 0")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--frames", type=int, default=1500, help="training frames (default 1500)")
-    ap.add_argument("--pixels", type=int, default=250, help="sampled pixels per training frame")
+    ap.add_argument("--frames", type=int, default=1800, help="training frames (default 1800)")
+    ap.add_argument("--pixels", type=int, default=400, help="sampled pixels per training frame")
     ap.add_argument("--candidates", type=int, default=500, help="random offset pairs (default 500)")
+    ap.add_argument("--radius", type=float, default=0.75, help="largest probe offset, metres (default 0.75)")
     ap.add_argument("--trees", type=int, default=3)
-    ap.add_argument("--max-depth", type=int, default=20)
+    ap.add_argument("--max-depth", type=int, default=22)
+    ap.add_argument("--upright", type=float, default=0.6, help="share of upright training frames (default 0.6)")
+    ap.add_argument("--max-features", type=int, default=40, help="offset pairs tried per split")
+    ap.add_argument("--min-leaf", type=int, default=10, help="fewest training pixels per leaf")
     ap.add_argument("--calib-frames", type=int, default=100, help="frames for the push-back fit")
     ap.add_argument("--eval-frames", type=int, default=120, help="frames per evaluation set")
     ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data")
@@ -315,32 +415,41 @@ def main(argv=None):
     if args.eval_only:
         forest = PartForest.load(args.out)
     else:
-        from sklearn.tree import DecisionTreeClassifier
+        from sklearn.tree import DecisionTreeClassifier, DecisionTreeRegressor
 
         rng = np.random.default_rng(args.seed)
-        offsets = sample_offsets(args.candidates, rng)
-        source = FrameSource(sets["train"], args.seed)
-        X, y = make_training_set(source, args.frames, offsets, args.pixels, args.quiet)
+        offsets = sample_offsets(args.candidates, rng, radius=args.radius)
+        source = FrameSource(sets["train"], args.seed, upright_fraction=args.upright)
+        data = make_training_set(source, args.frames, offsets, args.pixels, args.quiet)
+        X, y = data["X"], data["y"]
         t_data = time.perf_counter() - t0
-        trees, fsets = [], []
-        share = max(1, int(0.7 * args.candidates))
-        for t in range(args.trees):
-            fset = np.sort(rng.choice(args.candidates, share, replace=False))
-            rows = rng.random(len(y)) < 0.7
-            tree = DecisionTreeClassifier(max_depth=args.max_depth, min_samples_leaf=8, max_features=60,
-                                          random_state=int(rng.integers(1 << 31)))
-            tree.fit(X[rows][:, fset].astype(np.float32), y[rows])
-            trees.append(tree)
-            fsets.append(fset)
-            print(f"tree {t + 1}/{args.trees}: {tree.tree_.node_count} nodes, depth {tree.get_depth()}, "
-                  f"{time.perf_counter() - t0:.0f} s", file=sys.stderr)
-        forest = export_trees(trees, fsets, offsets, np.zeros(len(JOINT_NAMES)), {})
+        # stage 1: the body's axes per pixel (regression), one estimate per frame at run time
+        target = np.concatenate([data["axes"][data["frame"], :, 0], data["axes"][data["frame"], :, 1]], axis=1)
+        o_trees, o_sets = fit_trees(lambda seed: DecisionTreeRegressor(
+            max_depth=18, min_samples_leaf=20, max_features=args.max_features, random_state=seed),
+            X, target, 2, args.candidates, rng, label="orientation tree")
+        orient = export_trees(o_trees, o_sets, args.candidates)
+        zero = Trees(np.zeros(1), np.zeros(1), [-1], [0], [0], np.full((1, NUM_PARTS), 1.0 / NUM_PARTS))
+        forest = PartForest(offsets, orient, zero, np.zeros(len(JOINT_NAMES)))
+        errors = orientation_errors(forest, source, args.calib_frames, args.quiet)
+        angle = np.degrees(np.arccos(np.clip((np.trace(errors, axis1=1, axis2=2) - 1) / 2, -1, 1)))
+        print(f"orientation error on {len(errors)} fresh frames: median {np.median(angle):.0f} deg, "
+              f"under 45 deg {np.mean(angle < 45):.0%}", file=sys.stderr)
+        # stage 2: parts from the offset pairs and the body-frame inputs (with realistic axis errors)
+        extras = noisy_extras(data, errors, rng)
+        trees, fsets = fit_trees(lambda seed: DecisionTreeClassifier(
+            max_depth=args.max_depth, min_samples_leaf=args.min_leaf, max_features=args.max_features,
+            random_state=seed), X, y, args.trees, args.candidates, rng, extras=extras, label="part tree")
+        forest.parts = export_trees(trees, fsets, args.candidates, classes=NUM_PARTS)
         check_export(forest, trees, fsets, offsets, source)
+        del X, extras, data
         forest.push_back = fit_push_back(forest, source, args.calib_frames, args.quiet)
         source.release()
         forest.meta = {"trained_by": "tools/train_recognizer.py", "seed": args.seed, "frames": args.frames,
                        "pixels_per_frame": args.pixels, "candidates": args.candidates, "trees": args.trees,
-                       "max_depth": args.max_depth, "samples": int(len(y)),
+                       "max_depth": args.max_depth, "samples": int(len(y)), "radius": args.radius,
+                       "upright": args.upright, "max_features": args.max_features, "min_leaf": args.min_leaf,
+                       "orientation_error_median_deg": round(float(np.median(angle)), 1),
                        "train_motions": [n for n, _ in sets["train"]], "train_seconds": round(time.perf_counter() - t0)}
         forest.save(args.out)        # evaluate what ships: float16 offsets and thresholds, uint8 leaves
         meta, forest = forest.meta, PartForest.load(args.out)

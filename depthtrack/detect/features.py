@@ -104,3 +104,39 @@ def pair_features(image, rows, cols, d, offsets, fx: float, fy: float) -> np.nda
     a = _probe(image, rows, cols, d, offsets[:, 0], offsets[:, 1], fx, fy)
     b = _probe(image, rows, cols, d, offsets[:, 2], offsets[:, 3], fx, fy)
     return a - b
+
+
+#: Per-pixel inputs besides the offset pairs: the frame's estimated body axes and the
+#: pixel's place along them (see :func:`body_frame_features`).
+BODY_FRAME_NAMES = ("forward_x", "forward_y", "forward_z", "up_x", "up_y", "up_z", "along_left", "along_up")
+
+
+def body_frame_features(points, centroid, forward, up) -> np.ndarray:
+    """The body's axes and each point's coordinates along them, as extra split inputs.
+
+    A depth-difference feature tells the front of a body from its back only through small
+    depth cues far from most pixels; given the body's axes (estimated for the whole frame
+    first), the side of a pixel is where it lies along the subject's left axis.
+
+    Parameters
+    ----------
+    points : (N, 3) float
+        Camera-frame points of the pixels.
+    centroid : (3,) float
+        Centre of the person's points.
+    forward, up : (3,) float
+        Unit vectors: the direction the torso faces and its head-ward axis (camera frame).
+
+    Returns
+    -------
+    (N, 8) float32
+        :data:`BODY_FRAME_NAMES`: ``forward``, ``up``, then ``(p - c) . left`` and
+        ``(p - c) . up`` in metres, ``left = up x forward`` (the subject's own left).
+    """
+    forward = np.asarray(forward, float)
+    up = np.asarray(up, float)
+    left = np.cross(up, forward)
+    rel = np.asarray(points, float) - np.asarray(centroid, float)
+    n = len(rel)
+    return np.column_stack([np.broadcast_to(forward, (n, 3)), np.broadcast_to(up, (n, 3)),
+                            rel @ left, rel @ up]).astype(np.float32)
