@@ -7,8 +7,8 @@ from depthtrack.body.rotations import matrix_to_rotvec, rotation_about
 from depthtrack.camera import Camera
 from depthtrack.contract import JOINT_INDEX
 from depthtrack.detect.features import BACKGROUND, depth_features, pair_features, probe_image
-from depthtrack.detect.recognizer import (JointProposals, PartForest, joint_proposals, load_forest,
-                                          mean_shift, recognize)
+from depthtrack.detect.recognizer import (JointProposals, PartForest, body_orientation, joint_proposals,
+                                          load_forest, mean_shift, recognize)
 from depthtrack.detect.recognizer_parts import BODY_PARTS, PART_ID, mirror_parts
 from depthtrack.errors import InputError
 from depthtrack.synth.noise import ToFNoise
@@ -98,7 +98,9 @@ def test_model_file_round_trip_and_bad_file(tmp_path):
     path = tmp_path / "r.npz"
     forest.save(path)
     again = PartForest.load(path)
-    assert np.array_equal(again.left, forest.left) and np.allclose(again.leaf_probs, forest.leaf_probs, atol=0.01)
+    assert np.array_equal(again.parts.left, forest.parts.left)
+    assert np.allclose(again.parts.leaf_values, forest.parts.leaf_values, atol=0.01)
+    assert np.allclose(again.orient.leaf_values, forest.orient.leaf_values, atol=0.01)
     (tmp_path / "bad.npz").write_bytes(b"not a model")
     with pytest.raises(InputError, match="bad.npz"):
         PartForest.load(tmp_path / "bad.npz")
@@ -138,6 +140,14 @@ def test_left_and_right_not_swapped_front_and_back(scene, turn):
     f = _frame(scene, rotation=rotation_about(np.array([0.0, 1.0, 0.0]), turn))
     labels, _ = recognize(f.depth, f.mask, scene[1])
     assert _side_agreement(labels, f.labels, f.mask) > 0.8
+
+
+@pytest.mark.parametrize("turn, forward", [(0.0, (0, 0, -1)), (np.pi, (0, 0, 1))])
+def test_body_orientation_front_and_back(scene, turn, forward):
+    """The frame-level axes: facing the camera or away, head up."""
+    f = _frame(scene, rotation=rotation_about(np.array([0.0, 1.0, 0.0]), turn))
+    fwd, up = body_orientation(f.depth, f.mask, scene[1])
+    assert fwd @ np.array(forward, float) > 0.7 and up @ np.array([0.0, -1.0, 0.0]) > 0.8
 
 
 def test_upside_down_head_found(scene):

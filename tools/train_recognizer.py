@@ -287,7 +287,8 @@ def check_export(forest, trees, fsets, offsets, source):
     X = depth_features(image, np.stack([rows, cols], 1), offsets, camera.fx, camera.fy)
     pts, centre = person_points(frame.depth, frame.mask, camera, rows, cols)
     axes = forest.orientation(image, rows, cols, camera.fx, camera.fy)
-    extras = body_frame_features(pts, pts.mean(axis=0), *axes)
+    extras = (np.zeros((len(rows), 0), np.float32) if forest.orient is None
+              else body_frame_features(pts, pts.mean(axis=0), *axes))
     ref = np.zeros((len(rows), NUM_PARTS))
     for tree, fset in zip(trees, fsets):
         ref[:, tree.classes_] += tree.predict_proba(np.hstack([X[:, fset], extras])) / len(trees)
@@ -329,9 +330,13 @@ def evaluate(forest, source, n_frames, quiet, label):
         for _ in range(n_frames):
             cam_name, camera, frame, upright = source.frame()
             rows, cols = np.nonzero(frame.mask)
+            if not len(rows):           # the body left the image or the sensor's range
+                progress.update()
+                continue
             axes = forest.orientation(probe_image(frame.depth, frame.mask), rows, cols, camera.fx, camera.fy)
             truth = body_axes(source.body, frame.pose)
-            facing[0 if upright else 1] += [axes[0] @ truth[:, 0] > 0, 1]
+            if forest.orient is not None:
+                facing[0 if upright else 1] += [axes[0] @ truth[:, 0] > 0, 1]
             labels, probs = recognize(frame.depth, frame.mask, camera, forest=forest, orientation=axes)
             sel = frame.mask & (frame.labels >= 0) & (labels >= 0)
             np.add.at(confusion, (frame.labels[sel], labels[sel]), 1)
@@ -356,8 +361,8 @@ def evaluate(forest, source, n_frames, quiet, label):
     return {"frames": int(n_frames), "pixel_accuracy": float(tp.sum() / max(confusion.sum(), 1)),
             "precision": dict(zip(BODY_PARTS, precision.round(4).tolist())),
             "recall": dict(zip(BODY_PARTS, recall.round(4).tolist())),
-            "facing_correct_upright": float(facing[0, 0] / max(facing[0, 1], 1)),
-            "facing_correct_rotated": float(facing[1, 0] / max(facing[1, 1], 1)),
+            "facing_correct_upright": float(facing[0, 0] / facing[0, 1]) if facing[0, 1] else None,
+            "facing_correct_rotated": float(facing[1, 0] / facing[1, 1]) if facing[1, 1] else None,
             "left_right_correct_upright": float(side[0, 0] / max(side[0, 1], 1)),
             "left_right_correct_rotated": float(side[1, 0] / max(side[1, 1], 1)),
             "joint_within_10cm_any_of_3": float(hit_any.sum() / (frames.sum() * len(JOINT_NAMES))),
@@ -375,7 +380,9 @@ def print_report(results):
     for part in BODY_PARTS:
         print(f"{part:14}" + "".join(f" {results[n]['precision'][part]:12.3f} {results[n]['recall'][part]:12.3f}"
                                      for n in names))
-    for key in ("pixel_accuracy", "facing_correct_upright", "facing_correct_rotated", "left_right_correct_upright", "left_right_correct_rotated", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
+    keys = ("facing_correct_upright", "facing_correct_rotated") if results[names[0]]["facing_correct_upright"] \
+        is not None else ()
+    for key in ("pixel_accuracy", *keys, "left_right_correct_upright", "left_right_correct_rotated", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
                 "upright_within_10cm_any_of_3", "rotated_within_10cm_any_of_3"):
         print(f"{key:32}" + "".join(f" {results[n][key]:10.3f} ({n})" for n in names))
     print("per joint, a proposal (of 3) within 10 cm:")
@@ -399,6 +406,8 @@ def main(argv=None):
     ap.add_argument("--upright", type=float, default=0.6, help="share of upright training frames (default 0.6)")
     ap.add_argument("--max-features", type=int, default=40, help="offset pairs tried per split")
     ap.add_argument("--min-leaf", type=int, default=10, help="fewest training pixels per leaf")
+    ap.add_argument("--orientation", action="store_true",
+                    help="add the (experimental) first stage that estimates the body's axes")
     ap.add_argument("--calib-frames", type=int, default=100, help="frames for the push-back fit")
     ap.add_argument("--eval-frames", type=int, default=120, help="frames per evaluation set")
     ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data")
@@ -423,20 +432,22 @@ def main(argv=None):
         data = make_training_set(source, args.frames, offsets, args.pixels, args.quiet)
         X, y = data["X"], data["y"]
         t_data = time.perf_counter() - t0
-        # stage 1: the body's axes per pixel (regression), one estimate per frame at run time
-        target = np.concatenate([data["axes"][data["frame"], :, 0], data["axes"][data["frame"], :, 1]], axis=1)
-        o_trees, o_sets = fit_trees(lambda seed: DecisionTreeRegressor(
-            max_depth=18, min_samples_leaf=20, max_features=args.max_features, random_state=seed),
-            X, target, 2, args.candidates, rng, label="orientation tree")
-        orient = export_trees(o_trees, o_sets, args.candidates)
-        zero = Trees(np.zeros(1), np.zeros(1), [-1], [0], [0], np.full((1, NUM_PARTS), 1.0 / NUM_PARTS))
-        forest = PartForest(offsets, orient, zero, np.zeros(len(JOINT_NAMES)))
-        errors = orientation_errors(forest, source, args.calib_frames, args.quiet)
-        angle = np.degrees(np.arccos(np.clip((np.trace(errors, axis1=1, axis2=2) - 1) / 2, -1, 1)))
-        print(f"orientation error on {len(errors)} fresh frames: median {np.median(angle):.0f} deg, "
-              f"under 45 deg {np.mean(angle < 45):.0%}", file=sys.stderr)
-        # stage 2: parts from the offset pairs and the body-frame inputs (with realistic axis errors)
-        extras = noisy_extras(data, errors, rng)
+        forest = PartForest(offsets, None, Trees(np.zeros(1), np.zeros(1), [-1], [0], [0], np.ones((1, NUM_PARTS))),
+                            np.zeros(len(JOINT_NAMES)))
+        extras, angle = None, np.array([np.nan])
+        if args.orientation:
+            # stage 1: the body's axes per pixel (regression), one estimate per frame at run time
+            target = np.concatenate([data["axes"][data["frame"], :, 0], data["axes"][data["frame"], :, 1]], axis=1)
+            o_trees, o_sets = fit_trees(lambda seed: DecisionTreeRegressor(
+                max_depth=18, min_samples_leaf=20, max_features=args.max_features, random_state=seed),
+                X, target, 2, args.candidates, rng, label="orientation tree")
+            forest.orient = export_trees(o_trees, o_sets, args.candidates)
+            errors = orientation_errors(forest, source, args.calib_frames, args.quiet)
+            angle = np.degrees(np.arccos(np.clip((np.trace(errors, axis1=1, axis2=2) - 1) / 2, -1, 1)))
+            print(f"orientation error on {len(errors)} fresh frames: median {np.median(angle):.0f} deg, "
+                  f"under 45 deg {np.mean(angle < 45):.0%}", file=sys.stderr)
+            extras = noisy_extras(data, errors, rng)
+        # the part trees: offset pairs (and after stage 1 the body-frame inputs, with realistic axis errors)
         trees, fsets = fit_trees(lambda seed: DecisionTreeClassifier(
             max_depth=args.max_depth, min_samples_leaf=args.min_leaf, max_features=args.max_features,
             random_state=seed), X, y, args.trees, args.candidates, rng, extras=extras, label="part tree")
@@ -449,7 +460,8 @@ def main(argv=None):
                        "pixels_per_frame": args.pixels, "candidates": args.candidates, "trees": args.trees,
                        "max_depth": args.max_depth, "samples": int(len(y)), "radius": args.radius,
                        "upright": args.upright, "max_features": args.max_features, "min_leaf": args.min_leaf,
-                       "orientation_error_median_deg": round(float(np.median(angle)), 1),
+                       "orientation_stage": bool(args.orientation),
+                       "orientation_error_median_deg": round(float(np.median(angle)), 1) if args.orientation else None,
                        "train_motions": [n for n, _ in sets["train"]], "train_seconds": round(time.perf_counter() - t0)}
         forest.save(args.out)        # evaluate what ships: float16 offsets and thresholds, uint8 leaves
         meta, forest = forest.meta, PartForest.load(args.out)

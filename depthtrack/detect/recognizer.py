@@ -1,17 +1,25 @@
 """Per-pixel body-part recognition and joint proposals from one depth frame.
 
 After Shotton et al., "Real-time human pose recognition in parts from single depth
-images" (CVPR 2011): a randomized decision forest over depth-invariant depth-difference
-features (:mod:`.features`) labels every person pixel with one of :data:`BODY_PARTS`
+images" (CVPR 2011): randomized decision trees over depth-invariant depth-difference
+features (:mod:`.features`) label every person pixel with one of :data:`BODY_PARTS`
 (:mod:`.recognizer_parts`); mean shift over the back-projected pixels, weighted by the
 part's probability times the pixel's surface area, finds each part's modes, and each mode
 pushed a learned depth behind the surface proposes a joint.
 
+An optional first stage (not in the shipped model, see the README): regression trees
+estimate the body's axes (where the torso faces, where its head is) from every pixel,
+averaged over the frame, and the part trees also split on those axes and each pixel's
+coordinates along them (:func:`~depthtrack.detect.features.body_frame_features`), meant
+to tell front from back, and so left from right.
+
 * :func:`recognize` ``(depth, mask, camera) -> (labels (H, W) int8, probs (H, W, C) float32)``
 * :func:`joint_proposals` ``(depth, probs, camera, k=3) -> JointProposals`` -- up to ``k``
   3D proposals with confidences for each of the 15 contract joints.
+* :func:`body_orientation` ``(depth, mask, camera) -> (forward (3,), up (3,))`` (with the
+  optional first stage only)
 
-The forest ships as ``depthtrack/data/recognizer.npz`` (``tools/train_recognizer.py``),
+The trees ship as ``depthtrack/data/recognizer.npz`` (``tools/train_recognizer.py``),
 evaluated with numpy alone.
 """
 from __future__ import annotations
@@ -94,6 +102,8 @@ class Trees:
         (N, V) float32
         """
         n, trees, k = len(rows), len(self.roots), len(offsets)
+        if n == 0:
+            return np.zeros((0, self.leaf_values.shape[1]), np.float32)
         node = np.repeat(self.roots, n)
         pix = np.tile(np.arange(n), trees)
         r = np.asarray(rows, np.float32)
@@ -121,25 +131,27 @@ class PartForest:
     ----------
     offsets : (K, 4) float32
         Candidate offset pairs ``u_x, u_y, v_x, v_y`` (m) that split nodes index.
-    orient : Trees
-        Regression trees: per pixel the body's ``forward`` and ``up`` axes (camera frame,
-        6 values), averaged over the person to one estimate per frame.
+    orient : Trees or None
+        Optional first stage (``train_recognizer.py --orientation``; the shipped model has
+        none): regression trees giving per pixel the body's ``forward`` and ``up`` axes
+        (camera frame, 6 values), averaged over the person to one estimate per frame.
     parts : Trees
-        Classification trees over the offset pairs and the body-frame inputs: the
-        :data:`BODY_PARTS` distribution per pixel.
+        Classification trees over the offset pairs (and, after an orientation stage, the
+        body-frame inputs): the :data:`BODY_PARTS` distribution per pixel.
     push_back : (15,) float32
         Metres a joint lies behind its part's surface mode (camera z).
     meta : dict
         How the forest was trained.
     """
 
-    def __init__(self, offsets, orient: Trees, parts: Trees, push_back, meta=None):
+    def __init__(self, offsets, orient: Trees | None, parts: Trees, push_back, meta=None):
         self.offsets = np.asarray(offsets, np.float32)
         self.orient = orient
         self.parts = parts
         self.push_back = np.asarray(push_back, np.float32)
         self.meta = dict(meta or {})
-        if parts.leaf_values.shape[1] != len(BODY_PARTS) or orient.leaf_values.shape[1] != 6 \
+        if parts.leaf_values.shape[1] != len(BODY_PARTS) \
+                or (orient is not None and orient.leaf_values.shape[1] != 6) \
                 or self.push_back.shape != (len(JOINT_NAMES),):
             raise ValueError("forest does not match BODY_PARTS / the contract joints")
 
@@ -149,11 +161,12 @@ class PartForest:
         from ..io.atomic import atomic_path
 
         meta = {**self.meta, "format": FORMAT, "parts": list(BODY_PARTS), "joints": list(JOINT_NAMES)}
+        orient = {} if self.orient is None else {**self.orient.arrays("orient_"),
+                                                 "orient_values": self.orient.leaf_values.astype(np.float16)}
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez_compressed(
-                    fh, offsets=self.offsets.astype(np.float16), **self.orient.arrays("orient_"),
-                    orient_values=self.orient.leaf_values.astype(np.float16), **self.parts.arrays("parts_"),
+                    fh, offsets=self.offsets.astype(np.float16), **orient, **self.parts.arrays("parts_"),
                     parts_values=np.rint(self.parts.leaf_values * 255).astype(np.uint8),
                     push_back=self.push_back, meta=json.dumps(meta))
 
@@ -167,14 +180,17 @@ class PartForest:
                     raise InputError(path, f"not a {FORMAT} model for these body parts")
                 probs = z["parts_values"].astype(np.float32) / 255.0
                 probs /= np.maximum(probs.sum(axis=1, keepdims=True), 1e-6)
-                return cls(z["offsets"], Trees.from_arrays(z, "orient_", z["orient_values"]),
-                           Trees.from_arrays(z, "parts_", probs), z["push_back"], meta)
+                orient = Trees.from_arrays(z, "orient_", z["orient_values"]) if "orient_values" in z else None
+                return cls(z["offsets"], orient, Trees.from_arrays(z, "parts_", probs), z["push_back"], meta)
         except (OSError, KeyError, ValueError) as exc:
             raise InputError(path, f"cannot read the recogniser model ({exc})") from None
 
     # ------------------------------------------------------------------ inference
     def orientation(self, image, rows, cols, fx: float, fy: float, max_pixels: int = 800):
-        """The body's ``forward`` and ``up`` unit axes (camera frame), from evenly thinned pixels."""
+        """The body's ``forward`` and ``up`` unit axes (camera frame), from evenly thinned pixels;
+        NaN without an orientation stage or pixels."""
+        if self.orient is None or not len(rows):
+            return np.full(3, np.nan), np.full(3, np.nan)
         step = max(1, int(np.ceil(len(rows) / max_pixels)))
         v = self.orient.predict(image, rows[::step], cols[::step], self.offsets, fx, fy).mean(axis=0)
         forward = v[:3] / max(np.linalg.norm(v[:3]), 1e-9)
@@ -194,6 +210,8 @@ class PartForest:
         orientation : (forward (3,), up (3,)) or None
             Default: estimated with :meth:`orientation`.
         """
+        if self.orient is None:
+            return self.parts.predict(image, rows, cols, self.offsets, fx, fy), None
         if orientation is None:
             orientation = self.orientation(image, rows, cols, fx, fy)
         extras = body_frame_features(points, points.mean(axis=0), *orientation)
