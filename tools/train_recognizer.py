@@ -326,6 +326,7 @@ def evaluate(forest, source, n_frames, quiet, label):
     hit_top = np.zeros((2, len(JOINT_NAMES)))
     frames = np.zeros(2)
     per_camera = {}
+    timing = {}                      # camera -> [(recognize s, proposals s)] per frame
     with Progress(n_frames, label, quiet=quiet) as progress:
         for _ in range(n_frames):
             cam_name, camera, frame, upright = source.frame()
@@ -337,13 +338,16 @@ def evaluate(forest, source, n_frames, quiet, label):
             truth = body_axes(source.body, frame.pose)
             if forest.orient is not None:
                 facing[0 if upright else 1] += [axes[0] @ truth[:, 0] > 0, 1]
+            t_start = time.perf_counter()
             labels, probs = recognize(frame.depth, frame.mask, camera, forest=forest, orientation=axes)
+            t_labels = time.perf_counter()
             sel = frame.mask & (frame.labels >= 0) & (labels >= 0)
             np.add.at(confusion, (frame.labels[sel], labels[sel]), 1)
             t, g = frame.labels[sel], labels[sel]
             both = sided[t] & sided[g]
             side[0 if upright else 1] += [np.sum(sides[t[both]] == sides[g[both]]), both.sum()]
             prop = joint_proposals(frame.depth, probs, camera, k=3, forest=forest)
+            timing.setdefault(cam_name, []).append([t_labels - t_start, time.perf_counter() - t_labels])
             dist = np.linalg.norm(prop.positions - frame.joints[:, None], axis=2)
             any_hit = np.nanmin(np.where(np.isfinite(dist), dist, np.inf), axis=1) < 0.10
             row = 0 if upright else 1
@@ -370,7 +374,9 @@ def evaluate(forest, source, n_frames, quiet, label):
             "upright_within_10cm_any_of_3": float(hit_any[0].sum() / (total[0, 0] * len(JOINT_NAMES))),
             "rotated_within_10cm_any_of_3": float(hit_any[1].sum() / (total[1, 0] * len(JOINT_NAMES))),
             "per_joint_within_10cm_any_of_3": dict(zip(JOINT_NAMES, (hit_any.sum(0) / frames.sum()).round(3).tolist())),
-            "per_camera_within_10cm_any_of_3": {k: round(v[1] / v[0], 4) for k, v in per_camera.items()}}
+            "per_camera_within_10cm_any_of_3": {k: round(float(v[1] / v[0]), 4) for k, v in per_camera.items()},
+            "median_ms_recognize_proposals": {k: np.round(1000 * np.median(v, axis=0), 1).tolist()
+                                              for k, v in timing.items()}}
 
 
 def print_report(results):
@@ -389,7 +395,8 @@ def print_report(results):
     for j in JOINT_NAMES:
         print(f"  {j:12}" + "".join(f" {results[n]['per_joint_within_10cm_any_of_3'][j]:8.3f}" for n in names))
     for n in names:
-        print(f"per camera ({n}): {results[n]['per_camera_within_10cm_any_of_3']}")
+        print(f"per camera ({n}): {results[n]['per_camera_within_10cm_any_of_3']}; median ms per frame "
+              f"(recognize, proposals; one core): {results[n]['median_ms_recognize_proposals']}")
 
 
 def main(argv=None):
