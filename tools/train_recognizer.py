@@ -23,7 +23,7 @@ renders of the train motions (another seed), on the dev motions, and on the test
 
 Usage::
 
-    nice -n 10 .venv/bin/python tools/train_recognizer.py [--seed 0] [--frames 1500]
+    nice -n 10 .venv/bin/python tools/train_recognizer.py [--seed 0] [--frames 1800]
         [--trees 3] [--eval-frames 120] [--data ../shared/data] [--out depthtrack/data/recognizer.npz]
     nice -n 10 .venv/bin/python tools/train_recognizer.py --eval-only   # evaluate the shipped model
 """
@@ -47,7 +47,7 @@ from depthtrack.camera import Camera  # noqa: E402
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.detect.features import depth_features, probe_image, sample_offsets  # noqa: E402
 from depthtrack.detect.recognizer import PartForest, Trees, default_path, joint_proposals, recognize  # noqa: E402
-from depthtrack.detect.recognizer_parts import BODY_PARTS, NUM_PARTS  # noqa: E402
+from depthtrack.detect.recognizer_parts import BODY_PARTS, NUM_PARTS, mirror_parts  # noqa: E402
 from depthtrack.progress import Progress  # noqa: E402
 from depthtrack.synth.noise import ToFNoise  # noqa: E402
 from depthtrack.synth.part_scenes import render_part_frame  # noqa: E402
@@ -362,7 +362,10 @@ def evaluate(forest, source, n_frames, quiet, label):
     precision = tp / np.maximum(confusion.sum(0), 1)
     recall = tp / np.maximum(confusion.sum(1), 1)
     total = np.maximum(frames, 1)[:, None]
+    twin = mirror_parts()
+    side_free = (np.trace(confusion) + sum(confusion[i, twin[i]] for i in range(NUM_PARTS) if twin[i] != i))
     return {"frames": int(n_frames), "pixel_accuracy": float(tp.sum() / max(confusion.sum(), 1)),
+            "side_free_pixel_accuracy": float(side_free / max(confusion.sum(), 1)),
             "precision": dict(zip(BODY_PARTS, precision.round(4).tolist())),
             "recall": dict(zip(BODY_PARTS, recall.round(4).tolist())),
             "facing_correct_upright": float(facing[0, 0] / facing[0, 1]) if facing[0, 1] else None,
@@ -388,7 +391,8 @@ def print_report(results):
                                      for n in names))
     keys = ("facing_correct_upright", "facing_correct_rotated") if results[names[0]]["facing_correct_upright"] \
         is not None else ()
-    for key in ("pixel_accuracy", *keys, "left_right_correct_upright", "left_right_correct_rotated", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
+    for key in ("pixel_accuracy", "side_free_pixel_accuracy", *keys, "left_right_correct_upright",
+                "left_right_correct_rotated", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
                 "upright_within_10cm_any_of_3", "rotated_within_10cm_any_of_3"):
         print(f"{key:32}" + "".join(f" {results[n][key]:10.3f} ({n})" for n in names))
     print("per joint, a proposal (of 3) within 10 cm:")
@@ -492,4 +496,10 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from depthtrack.errors import InputError
+
+    try:
+        sys.exit(main())
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
