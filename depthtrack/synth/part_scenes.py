@@ -6,8 +6,11 @@ camera looking slightly down, a floor and a back wall), rendered with
 :class:`depthtrack.render.FrameRenderer`, optionally made noisy, and returned with the
 true person mask, the floor plane and the contract joints in the camera frame.
 
-Only the training tool (``tools/train_part_classifier.py``) and the tests use this
-module; run-time detection never imports it (it needs OpenGL).
+:func:`render_part_frame` renders a camera-frame pose alone (no room) with the per-pixel
+body-part labels of :mod:`depthtrack.detect.recognizer_parts`, for the recogniser.
+
+Only the training tools (``tools/train_part_classifier.py``, ``tools/train_recognizer.py``)
+and the tests use this module; run-time detection never imports it (it needs OpenGL).
 """
 from __future__ import annotations
 
