@@ -6,8 +6,11 @@ camera looking slightly down, a floor and a back wall), rendered with
 :class:`depthtrack.render.FrameRenderer`, optionally made noisy, and returned with the
 true person mask, the floor plane and the contract joints in the camera frame.
 
-Only the training tool (``tools/train_part_classifier.py``) and the tests use this
-module; run-time detection never imports it (it needs OpenGL).
+:func:`render_part_frame` renders a camera-frame pose alone (no room) with the per-pixel
+body-part labels of :mod:`depthtrack.detect.recognizer_parts`, for the recogniser.
+
+Only the training tools (``tools/train_part_classifier.py``, ``tools/train_recognizer.py``)
+and the tests use this module; run-time detection never imports it (it needs OpenGL).
 """
 from __future__ import annotations
 
@@ -170,3 +173,55 @@ def extremum_truth(label_image, pixels, joint_names, window: int = 2) -> np.ndar
         if len(w):
             out[i] = bone_class[np.bincount(w).argmax()]
     return out
+
+
+def render_part_frame(body, pose, camera, renderer, noise=None, rng=None, wall_gap=None) -> SceneFrame:
+    """Render a camera-frame pose with per-pixel body-part labels (the recogniser's training frames).
+
+    Parameters
+    ----------
+    body : BodyModel
+    pose : (48,) float
+        Camera frame.
+    camera : Camera
+    renderer : FrameRenderer
+    noise : ToFNoise or None
+        Applied with ``rng``; a wall ``wall_gap`` m behind the body's farthest joint gives
+        the silhouette its flying pixels, and is then removed (the person mask excludes it).
+    wall_gap : float or None
+        None = no wall.
+
+    Returns
+    -------
+    SceneFrame
+        ``labels`` holds :data:`depthtrack.detect.recognizer_parts.BODY_PARTS` indices (int8,
+        -1 off the person); ``mask`` the person pixels whose reading stayed within 5 cm of the
+        ideal depth; ``depth`` has readings on the person only (0 elsewhere).
+    """
+    from ..detect.recognizer_parts import part_labels
+
+    pose = np.asarray(pose, float)
+    rng = np.random.default_rng(0) if rng is None else rng
+    bones = renderer.render_labels(body, pose)
+    body_depth = renderer.render(body, pose)
+    joints = np.asarray(body.joint_positions(pose))
+    meshes = []
+    if wall_gap is not None:
+        z = float(joints[:, 2].max() + wall_gap)
+        half = 20.0 * z
+        quad = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]], np.float32)
+        meshes = [(quad, np.array([[0, 1, 2], [0, 2, 3]], np.int32))]
+    depth = renderer.render(body, pose, extra_meshes=meshes) if meshes else body_depth
+    body_mask = bones >= 0
+    ideal = np.asarray(depth, np.float32)
+    if noise is not None:
+        depth = noise.apply(depth, rng)
+    depth = np.asarray(depth, np.float32)
+    mask = body_mask & (depth > 0) & (np.abs(depth - body_depth) < 0.05)
+    transforms = np.asarray(body.world_transforms(pose))
+    points = camera.backproject(np.where(body_mask, body_depth, 0.0))
+    parts = part_labels(bones, points, transforms, joints[0], scale=float(body.height) / 1.75)
+    parts[~body_mask] = -1
+    depth = np.where(mask, depth, np.float32(0.0))
+    plane = np.full(4, np.nan)       # no floor in these frames
+    return SceneFrame(depth, mask, plane, joints, pose, parts, ideal)
