@@ -9,9 +9,9 @@ from depthtrack.body.markers import MARKER_NAMES, marker_positions
 from depthtrack.cli import main
 from depthtrack.contract import JOINT_INDEX, JOINT_NAMES
 from depthtrack.io.bvh import read_bvh, write_bvh
-from depthtrack.io.export_axes import Y_UP_FROM_CAMERA, Z_UP_FROM_CAMERA
-from depthtrack.io.export_bvh import bvh_text
-from depthtrack.io.exports import EXPORTERS, write_exports
+from depthtrack.export.axes import Y_UP_FROM_CAMERA, Z_UP_FROM_CAMERA
+from depthtrack.export.bvh import bvh_text
+from depthtrack.export.registry import EXPORTERS, write_exports
 from depthtrack.io.track_output import hold_last_pose, write_track
 
 FPS = 30.0

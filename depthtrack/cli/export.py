@@ -57,7 +57,7 @@ def export_track_outputs(out_dir, body, poses, joints, fps, formats, smooth="non
 
     Raw exports take the track's own joints; smoothed ones take joints of the smoothed poses.
     """
-    from ..io.exports import parse_formats, write_exports
+    from ..export.registry import parse_formats, write_exports
     from ..motion.smoothing import parse_smoothing, smooth_poses
 
     formats = parse_formats(formats)
@@ -70,7 +70,7 @@ def export_track_outputs(out_dir, body, poses, joints, fps, formats, smooth="non
 
 def run(args) -> int:
     from ..evaluate.runs import body_for_track
-    from ..io.exports import parse_formats
+    from ..export.registry import parse_formats
     from ..io.track_output import read_track
     from ..motion.smoothing import parse_smoothing
 

@@ -97,7 +97,7 @@ def run(args) -> int:
     if overlay is not None and overlay.suffix.lower() not in OVERLAY_SUFFIXES:
         raise InputError(overlay, "overlay must end in .mp4 or .gif")
     if getattr(args, "formats", None):                 # check export options before tracking
-        from ..io.exports import parse_formats
+        from ..export.registry import parse_formats
         from ..motion.smoothing import parse_smoothing
         parse_formats(args.formats)
         parse_smoothing(args.smooth)

@@ -12,7 +12,7 @@ retarget best from a T-pose, and some scenes are z up, so this writer adds:
   exactly where the track has it. ``rest="zero"`` writes our A-pose rest, as track.bvh.
 * ``up="y"`` (default; x right, y up, the body faces +z at rest) or ``up="z"`` (x right,
   y along the camera's view, z up: the body faces -y, as in Blender's front view); the
-  axes are :data:`depthtrack.io.export_axes.UP_AXES`, origin at the depth camera.
+  axes are :data:`depthtrack.export.axes.UP_AXES`, origin at the depth camera.
 
 Joint names are :data:`depthtrack.io.bvh.BODY_BVH_NAMES` (CMU/Mixamo style); the head
 centre is the neck's end site; rotations are ``Zrotation Yrotation Xrotation`` degrees,
@@ -27,9 +27,10 @@ from pathlib import Path
 import numpy as np
 
 from ..body.rotations import rotvec_to_matrix
-from .atomic import write_text_atomic
-from .bvh import BODY_BVH_NAMES, body_end_sites, matrix_to_euler
-from .export_axes import UP_AXES
+from ..io.atomic import write_text_atomic
+from ..io.bvh import BODY_BVH_NAMES, body_end_sites, matrix_to_euler
+from ..motion.retarget import rotation_between
+from .axes import UP_AXES
 
 REST_POSES = ("tpose", "zero")
 
@@ -44,8 +45,6 @@ _TPOSE_DIRECTIONS = {
 
 def rest_rotations(body, rest: str = "tpose") -> np.ndarray:
     """``(J, 3, 3)`` rotations ``G_j`` taking each joint's T-pose bone to our rest bone (identity for ``"zero"``)."""
-    from ..motion.retarget import rotation_between
-
     names = list(body.joint_names)
     G = np.tile(np.eye(3), (len(names), 1, 1))
     if rest == "zero":

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..contract import JOINT_NAMES
-from .atomic import write_text_atomic
+from ..io.atomic import write_text_atomic
 
 JOINTS_JSON_FORMAT = "depthtrack-joints/1"
 

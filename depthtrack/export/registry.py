@@ -1,10 +1,10 @@
 """Exports of a track for other tools: one registry, one module per format.
 
-* ``glb``  -> ``track.glb``: skinned body and animation (:mod:`.export_gltf`); y up, metres
+* ``glb``  -> ``track.glb``: skinned body and animation (:mod:`.gltf`); y up, metres
 * ``gltf`` -> ``track.gltf``: the same as JSON glTF, buffer embedded
-* ``c3d``  -> ``track.c3d``: 39 Plug-in Gait markers and 15 joints (:mod:`.export_c3d`); z up, mm
-* ``json`` -> ``joints.json``: per-frame joints (:mod:`.export_json`); camera frame, metres
-* ``bvh``  -> ``track.bvh``: T-pose rest skeleton (:mod:`.export_bvh`); ``up`` y or z, metres
+* ``c3d``  -> ``track.c3d``: 39 Plug-in Gait markers and 15 joints (:mod:`.c3d`); z up, mm
+* ``json`` -> ``joints.json``: per-frame joints (:mod:`.joints_json`); camera frame, metres
+* ``bvh``  -> ``track.bvh``: T-pose rest skeleton (:mod:`.bvh`); ``up`` y or z, metres
 * ``csv``  -> ``joints.csv``: ``frame,joint,x,y,z`` as the track's own; camera frame, metres
 
 A ``suffix`` (``"_smoothed"`` for smoothed exports) goes before the extension, so smoothed
@@ -21,10 +21,10 @@ import numpy as np
 
 from ..contract import JOINT_NAMES
 from ..errors import InputError
-from .atomic import write_text_atomic
-from .export_axes import UP_AXES
-from .sequence import format_points_csv
-from .track_output import hold_last_pose
+from ..io.atomic import write_text_atomic
+from .axes import UP_AXES
+from ..io.sequence import format_points_csv
+from ..io.track_output import hold_last_pose
 
 
 @dataclass(frozen=True)
@@ -37,22 +37,22 @@ class Exporter:
 
 
 def _glb(path, body, poses, joints, fps, up):
-    from .export_gltf import write_gltf
+    from .gltf import write_gltf
     return write_gltf(path, body, poses, fps)
 
 
 def _c3d(path, body, poses, joints, fps, up):
-    from .export_c3d import write_c3d
+    from .c3d import write_c3d
     return write_c3d(path, body, poses, joints, fps)
 
 
 def _json(path, body, poses, joints, fps, up):
-    from .export_json import write_joints_json
+    from .joints_json import write_joints_json
     return write_joints_json(path, joints, fps)
 
 
 def _bvh(path, body, poses, joints, fps, up):
-    from .export_bvh import write_bvh_export
+    from .bvh import write_bvh_export
     filled = hold_last_pose(poses)
     if filled is None:
         raise ValueError("the track has no frame with a pose")

@@ -37,9 +37,9 @@ from ..body.gltf import gltf_bytes
 from ..body.mesh import SkinnedMesh
 from ..body.rotations import matrix_to_quat, rotvec_to_matrix
 from ..contract import JOINT_INDEX
-from .atomic import write_bytes_atomic, write_text_atomic
-from .export_axes import Y_UP_FROM_CAMERA
-from .track_output import hold_last_pose
+from ..io.atomic import write_bytes_atomic, write_text_atomic
+from .axes import Y_UP_FROM_CAMERA
+from ..io.track_output import hold_last_pose
 
 #: Name of the animation in the file.
 ANIMATION_NAME = "track"

@@ -20,8 +20,8 @@ import numpy as np
 from ..body.markers import MARKER_NAMES, marker_vertices
 from ..body.mesh import linear_blend_skinning
 from ..contract import JOINT_NAMES
-from .atomic import atomic_path
-from .export_axes import Z_UP_FROM_CAMERA
+from ..io.atomic import atomic_path
+from .axes import Z_UP_FROM_CAMERA
 
 #: Millimetres per metre: C3D files from labs are in mm.
 MM = 1000.0
