@@ -28,7 +28,8 @@ import numpy as np
 
 from ..body.rotations import rotvec_to_matrix
 from ..io.atomic import write_text_atomic
-from ..io.bvh import BODY_BVH_NAMES, body_end_sites, matrix_to_euler
+from ..io.bvh import body_end_sites, matrix_to_euler
+from ..io.bvh.write import format_bvh
 from ..motion.retarget import rotation_between
 from .axes import UP_AXES
 
@@ -62,10 +63,6 @@ def rest_rotations(body, rest: str = "tpose") -> np.ndarray:
     return G
 
 
-def _fmt(values) -> str:
-    return " ".join(f"{v:.6f}" for v in values)
-
-
 def bvh_text(body, poses, fps: float, rest: str = "tpose", up: str = "y", units_m: float = 1.0) -> str:
     """The BVH file's text for finite ``poses (F, D)``; see the module docstring."""
     if up not in UP_AXES:
@@ -95,38 +92,7 @@ def bvh_text(body, poses, fps: float, rest: str = "tpose", up: str = "y", units_
     euler = np.unwrap(matrix_to_euler(V @ local @ V.T, "ZYX"), period=360.0, axis=0)
     root = poses[:, :3] @ V.T / units_m
 
-    children = [[] for _ in range(J)]
-    for j, p in enumerate(parents):
-        if p >= 0:
-            children[p].append(j)
-    lines, order = ["HIERARCHY"], []
-
-    def emit(j, depth):
-        order.append(j)
-        pad = "\t" * depth
-        lines.append(f"{pad}{'ROOT' if parents[j] < 0 else 'JOINT'} {BODY_BVH_NAMES.get(names[j], names[j])}")
-        lines.append(f"{pad}{{")
-        lines.append(f"{pad}\tOFFSET {_fmt(offsets[j] if parents[j] >= 0 else np.zeros(3))}")
-        if parents[j] < 0:
-            lines.append(f"{pad}\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation")
-        else:
-            lines.append(f"{pad}\tCHANNELS 3 Zrotation Yrotation Xrotation")
-        if j in ends:
-            lines.extend([f"{pad}\tEnd Site", f"{pad}\t{{", f"{pad}\t\tOFFSET {_fmt(ends[j])}", f"{pad}\t}}"])
-        for c in children[j]:
-            emit(c, depth + 1)
-        lines.append(f"{pad}}}")
-
-    emit(int(np.flatnonzero(parents < 0)[0]), 0)
-    columns = []
-    for j in order:
-        if parents[j] < 0:
-            columns.append(root)
-        columns.append(euler[:, j])
-    table = np.concatenate(columns, axis=1)
-    lines += ["MOTION", f"Frames: {F}", f"Frame Time: {1.0 / fps:.8f}"]
-    lines += [_fmt(row) for row in table]
-    return "\n".join(lines) + "\n"
+    return format_bvh(names, parents, offsets, ends, root, euler, fps)
 
 
 def write_bvh_export(path, body, poses, fps: float, rest: str = "tpose", up: str = "y",

@@ -85,17 +85,39 @@ def write_bvh(path, body, poses, fps: float, units_m: float = 1.0) -> None:
     rot_bvh = C @ rot @ C                      # C is its own inverse
     euler = np.unwrap(matrix_to_euler(rot_bvh, "ZYX"), period=360.0, axis=0)
     root = poses[:, :3] @ C.T / units_m
+    write_text_atomic(path, format_bvh(names, parents, offsets, ends, root, euler, fps))
 
-    children = [[] for _ in range(J)]
+
+def format_bvh(names, parents, offsets, ends, root, euler, fps: float) -> str:
+    """The text of a BVH file for our skeleton, every number already in the file's frame.
+
+    Parameters
+    ----------
+    names : sequence of str, (J,)
+        Our joint names (written as :data:`BODY_BVH_NAMES`).
+    parents : (J,) int
+        Parent index, -1 for the root.
+    offsets : (J, 3) float
+        Each joint's offset from its parent in the file's units and axes.
+    ends : dict {joint index: (3,) float}
+        End-site offsets.
+    root : (F, 3) float
+        Root positions.
+    euler : (F, J, 3) float
+        ``Zrotation Yrotation Xrotation`` channels per joint, degrees.
+    fps : float
+    """
+    parents = np.asarray(parents)
+    children = [[] for _ in range(len(names))]
     for j, p in enumerate(parents):
         if p >= 0:
             children[p].append(j)
-    lines = ["HIERARCHY"]
+    lines, order = ["HIERARCHY"], []
 
     def emit(j, depth):
+        order.append(j)
         pad = "\t" * depth
-        bvh_name = BODY_BVH_NAMES.get(names[j], names[j])
-        lines.append(f"{pad}{'ROOT' if parents[j] < 0 else 'JOINT'} {bvh_name}")
+        lines.append(f"{pad}{'ROOT' if parents[j] < 0 else 'JOINT'} {BODY_BVH_NAMES.get(names[j], names[j])}")
         lines.append(f"{pad}{{")
         lines.append(f"{pad}\tOFFSET {_fmt(offsets[j] if parents[j] >= 0 else np.zeros(3))}")
         if parents[j] < 0:
@@ -109,20 +131,12 @@ def write_bvh(path, body, poses, fps: float, units_m: float = 1.0) -> None:
         lines.append(f"{pad}}}")
 
     emit(int(np.flatnonzero(parents < 0)[0]), 0)
-    order = []
-
-    def walk(j):
-        order.append(j)
-        for c in children[j]:
-            walk(c)
-
-    walk(int(np.flatnonzero(parents < 0)[0]))
     columns = []
     for j in order:
         if parents[j] < 0:
             columns.append(root)
         columns.append(euler[:, j])
     table = np.concatenate(columns, axis=1)
-    lines += ["MOTION", f"Frames: {F}", f"Frame Time: {1.0 / fps:.8f}"]
+    lines += ["MOTION", f"Frames: {len(table)}", f"Frame Time: {1.0 / fps:.8f}"]
     lines += [_fmt(row) for row in table]
-    write_text_atomic(path, "\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
