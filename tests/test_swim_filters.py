@@ -170,3 +170,18 @@ def test_rbpf_prediction_does_not_depend_on_the_pose_representation():
     y, yf = predict(x0), predict(_flip(x0, [0, 4, 12]))
     np.testing.assert_allclose(nearest_equivalent(yf[:A], y[:A]), y[:A], atol=1e-6)
     assert np.abs(y[:A] - x0[:A]).max() > 0.1
+
+
+def test_gap_diagnosis_splits_the_error_into_model_and_filter_state():
+    from depthtrack.swim.experiment import SwimSetup
+    from depthtrack.swim.gap_diagnosis import diagnose
+    model, window, Q = _model_and_window()
+    setup = SwimSetup(model, window, [], "", "", "", Q, 0, 1.0)
+    z = window.angles + 0.05 * np.random.default_rng(5).standard_normal(window.angles.shape)
+    out = diagnose(setup, z, 10, first=20, spacing=40)
+    m = out["model_from"]
+    # the synthetic stroke follows the model: from the true state the prediction is near exact,
+    # from the filter's state it carries the state's error
+    assert m["true state"] < 0.2 * m["filter state"]
+    assert m["filter state"] < out["by_position"]["constant_velocity"][-1]
+    assert len(out["by_position"]["ukf-tuned"]) == 10 and out["gaps"][0] == [20, 30]
