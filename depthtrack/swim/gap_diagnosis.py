@@ -8,7 +8,9 @@ with the true phase and speed, and also the true angles or the true velocities
 (central differences of the truth), or all of them. The differences split the in-gap error
 into the model's own part and the part of each state component. Also the error
 by position inside the gap, of constant velocity and of the filter run with
-the gap withheld.
+the gap withheld, the error per segment inside the gaps, and how often each
+segment of the (continuous) truth is the other representation of the mean
+stroke's pose (:func:`depthtrack.swim.stickfigure.zenith_sign`).
 
 Run: ``python -m depthtrack.swim.gap_diagnosis --train B --test B [--test-start 566]
 [--noise 0.05] [--gaps 10,30]`` (JSON on stdout; a few seconds).
@@ -23,7 +25,8 @@ import numpy as np
 from ..filters.angles import wrap
 from .experiment import frame_errors, measurements, prepare
 from .gaps import gap_baselines, gap_mask, gap_runs, withhold
-from .stickfigure import continue_angles, nearest_equivalent
+from .stickfigure import (SEGMENTS, angle_error_sq, continue_angles, equivalent_branch,
+                          nearest_equivalent)
 from .tracking import decaying_transition, run_ukf_tuned
 from .tuning import estimate_measurement_noise
 
@@ -88,6 +91,13 @@ def diagnose(setup, z, length: int, first: int = 20, spacing: int = 40) -> dict:
         for i, (a, b) in enumerate(runs):
             pos[i, :b - a] = sq[a - 1:b - 1]
         out.setdefault("by_position", {})[name] = [round(float(x), 4) for x in np.nanmean(pos, axis=0)]
+        inside = mask[1:]
+        per_segment = angle_error_sq(est[inside], truth[1:][inside]).mean(axis=0)
+        out.setdefault("per_segment", {})[name] = {n: round(float(x), 4) for n, x in zip(SEGMENTS, per_segment)}
+    # how often the continuous truth is the other representation of the mean stroke's pose, per segment
+    mean_pose = model.interpolated_rows(model.mean_angles, window.phase)
+    _, flipped = equivalent_branch(continue_angles(truth, reference=mean_pose[0]), mean_pose)
+    out["other_branch_fraction"] = {n: round(float(x), 3) for n, x in zip(SEGMENTS, flipped.mean(axis=0))}
     return out
 
 
