@@ -19,9 +19,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 import numpy as np
 
+from ..errors import InputError
 from ..filters.angles import wrap
 from .experiment import frame_errors, measurements, prepare
 from .gaps import gap_baselines, gap_mask, gap_runs, withhold
@@ -110,7 +112,11 @@ def main(argv=None):
     p.add_argument("--gaps", default="10,30")
     p.add_argument("--seed", type=int, default=0)
     args = p.parse_args(argv)
-    setup = prepare(args.train, args.test, test_start=args.test_start)
+    try:
+        setup = prepare(args.train, args.test, test_start=args.test_start)
+    except InputError as exc:                     # one line naming the file, exit status 2
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
     z = measurements(setup.window, args.noise, np.random.default_rng(args.seed + 12345))
     print(json.dumps([diagnose(setup, z, int(k)) for k in args.gaps.split(",")], indent=1))
 
