@@ -88,6 +88,11 @@ class CycleRBPF:
     resample_threshold : float
         Resample when the effective sample size falls below this fraction of N.
     rng : numpy Generator
+    input_sign : callable((L, A) angles) -> (L, A) of +-1, optional
+        Sign of the mean-stroke input (``mu``, ``d``) for each cell's Kalman mean: angles with
+        two representations of one pose (a swimmer's zenith/azimuth pairs) need the learned
+        velocity and acceleration negated where the state is in the other branch than the
+        tables (:func:`depthtrack.swim.stickfigure.zenith_sign`); default all +1.
 
     Attributes
     ----------
@@ -102,7 +107,7 @@ class CycleRBPF:
 
     def __init__(self, accel_table, Q, R, x0, P0, phase, speed, temporal_sigma: float = 0.0,
                  circular=None, resample_threshold: float = 0.5, rng=None, min_speed: float = 0.0,
-                 velocity_table=None, rho: float = 1.0, gap_rho=None):
+                 velocity_table=None, rho: float = 1.0, gap_rho=None, input_sign=None):
         mu = np.asarray(accel_table, dtype=float)
         self.L, self.A = mu.shape
         A, D = self.A, 2 * self.A
@@ -114,6 +119,7 @@ class CycleRBPF:
         self._d = np.zeros_like(mu) if velocity_table is None else np.asarray(velocity_table, dtype=float)
         self.gap_rho = np.broadcast_to(np.asarray(rho if gap_rho is None else gap_rho, float), (A,)).copy()
         self._rho_measured = np.broadcast_to(np.asarray(rho, float), (A,)).copy()
+        self.input_sign = input_sign
         self.set_rho(self._rho_measured)
         self.X = np.tile(np.asarray(x0, dtype=float), (self.L, 1))
         self.P = np.asarray(P0, dtype=float).copy()
@@ -144,6 +150,13 @@ class CycleRBPF:
         self._decays = bool(np.any(self.rho != 1.0))
         self.Gd = np.tile(1 - self.rho, 2) * np.concatenate([self._d, self._d], axis=1)   # (L, D): per unit r
 
+    def _inputs(self):
+        """Per-cell inputs ``(Bmu, Gd)`` (L, D), in each cell's branch when ``input_sign`` is given."""
+        if self.input_sign is None:
+            return self.Bmu, self.Gd
+        sign = np.tile(np.asarray(self.input_sign(self.X[:, :self.A]), dtype=float), 2)
+        return self.Bmu * sign, self.Gd * sign
+
     @property
     def n(self) -> int:
         return len(self.phase)
@@ -167,11 +180,12 @@ class CycleRBPF:
         cell = self._cell if self._cell is not None else self.cells()
         r = self.speed * np.float32(L)                                # (N,) speed relative to the reference
         s = r * r                                                     # acceleration scale 1/k^2
+        Bmu, Gd = self._inputs()
         FX = self.X @ self.F.T                                        # (L, D)
         P_pred = self.F @ self.P @ self.F.T + self.Q
         self.P_prior = P_pred
         if z is None:
-            alpha, beta, gamma = FX, self.Bmu, self.Gd               # prediction = alpha + s beta + r gamma
+            alpha, beta, gamma = FX, Bmu, Gd                         # prediction = alpha + s beta + r gamma
             lw = self.log_w
             w = np.exp(lw)
             self.P = P_pred
@@ -183,7 +197,7 @@ class CycleRBPF:
             # innovation of a particle: a[cell] - s b[cell] - r g[cell]
             a = z - FX[:, :A]
             a = np.where(self.circular, wrap(a), a)                   # z taken next to each cell's prediction
-            b, g = self.Bmu[:, :A], self.Gd[:, :A]
+            b, g = Bmu[:, :A], Gd[:, :A]
             aW, bW = a @ W, b @ W
 
             def dot(u, v):
@@ -216,8 +230,8 @@ class CycleRBPF:
             IKH = np.eye(2 * A)
             IKH[:, :A] -= K                                           # I - K H with H = [I, 0]
             alpha = FX + a @ K.T
-            beta = self.Bmu @ IKH.T
-            gamma = self.Gd @ IKH.T
+            beta = Bmu @ IKH.T
+            gamma = Gd @ IKH.T
             self.P = IKH @ P_pred
             self.P = 0.5 * (self.P + self.P.T)
         # every cell's angles next to one reference (the measurement, else the last estimate)

@@ -168,6 +168,20 @@ def nearest_equivalent(angles, reference):
     return equivalent_branch(angles, reference)[0]
 
 
+def zenith_sign(angles, reference):
+    """``(..., 26)`` of +-1: -1 on the zenith of each segment whose representation in ``angles`` is the
+    ``(-theta, phi + pi)`` branch of the one in ``reference`` (both ``(..., 26)``, broadcast).
+
+    A velocity or acceleration learned in the reference's representation (the mean
+    stroke's) acts on a state in the other branch with its zenith part negated; the
+    azimuth part is the same in both branches.
+    """
+    _, flipped = equivalent_branch(angles, reference)
+    sign = np.ones(flipped.shape[:-1] + (13, 2))
+    sign[..., 0] = np.where(flipped, -1.0, 1.0)
+    return sign.reshape(flipped.shape[:-1] + (26,))
+
+
 def equivalent_branch(angles, reference):
     """Nearest representation of ``angles`` to ``reference`` and which branch it took.
 

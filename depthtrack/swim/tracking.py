@@ -29,7 +29,7 @@ from ..filters.smoother import rts_smooth
 from ..filters.ukf import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from ..motion.cyclic import CyclicMotionModel
 from .experiment import TestWindow, initial_state
-from .stickfigure import nearest_equivalent
+from .stickfigure import nearest_equivalent, zenith_sign
 
 
 def _initial(model: CyclicMotionModel, window: TestWindow, z, init: str, r_sigma: float, rng):
@@ -81,7 +81,7 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
     f = CycleRBPF(model.mean_acceleration, Q, r_sigma ** 2, x0, P0, phase, speed,
                   temporal_sigma=model.temporal_sigma, circular=model.circular, rng=rng,
                   min_speed=0.05 * model.v_ref, velocity_table=model.mean_velocities, rho=rho,
-                  gap_rho=gap_rho)
+                  gap_rho=gap_rho, input_sign=lambda angles: zenith_sign(angles, model.mean_angles))
     T = window.frames
     est = {"mean": np.empty((T, A)), "map": np.empty((T, A))}
     out_phase, out_speed, ess = np.empty(T), np.empty(T), np.empty(T)
@@ -102,18 +102,19 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
 
 def decaying_transition(model: CyclicMotionModel, rho: float):
     """The thesis's transition (:meth:`CyclicMotionModel.transition`, mean acceleration interpolated in c)
-    with the RBPF's velocity decay: ``omega' = rho omega + (1 - rho) d(c) v L + a``, for sigma points
-    ``(K, 2A + 2)``."""
+    with the RBPF's velocity decay, ``omega' = rho omega + (1 - rho) d(c) v L + a``, and the learned
+    velocity and acceleration in each sigma point's own branch (:func:`zenith_sign`: a segment whose
+    state is the ``(-theta, phi + pi)`` representation of the mean stroke's gets their zenith part
+    negated), for sigma points ``(K, 2A + 2)``."""
     A, L = model.n_angles, model.length
-    if np.all(np.asarray(rho) == 1.0):
-        return model.transition
     rho = np.asarray(rho, dtype=float)
 
     def fx(x):
         x = np.array(np.atleast_2d(x), dtype=float)
         c, v = x[:, 2 * A], x[:, 2 * A + 1]
-        acc = model.interpolated_rows(model.mean_acceleration, c) * ((v * L) ** 2)[:, None]
-        vel = model.interpolated_rows(model.mean_velocities, c) * (v * L)[:, None]
+        sign = zenith_sign(x[:, :A], model.interpolated_rows(model.mean_angles, c))
+        acc = sign * model.interpolated_rows(model.mean_acceleration, c) * ((v * L) ** 2)[:, None]
+        vel = sign * model.interpolated_rows(model.mean_velocities, c) * (v * L)[:, None]
         drift = rho * x[:, A:2 * A] + (1 - rho) * vel
         x[:, :A] += drift + 0.5 * acc
         x[:, A:2 * A] = drift + acc
@@ -180,7 +181,7 @@ def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: f
         xs[t], Ps[t] = ukf.x, ukf.P
     seconds = time.perf_counter() - start
     out = {"estimates": {"mean": xs[1:, :A].copy()}, "phase": xs[1:, 2 * A].copy(), "speed": xs[1:, 2 * A + 1].copy(),
-           "seconds": seconds}
+           "seconds": seconds, "states": xs[1:].copy()}
     if smooth:
         start = time.perf_counter()
         xs_s, _ = rts_smooth(xs, Ps, xp, Pp, Cs, residual=model.state_residual)

@@ -26,7 +26,7 @@ import numpy as np
 from ..filters.angles import wrap
 from ..motion.cyclic import CyclicMotionModel
 from .cycles import cycle_phase
-from .stickfigure import continue_angles
+from .stickfigure import continue_angles, zenith_sign
 
 
 def _training_frames(model: CyclicMotionModel, angles, starts, step: int):
@@ -44,7 +44,9 @@ def _training_frames(model: CyclicMotionModel, angles, starts, step: int):
     om = 0.5 * (th[2:] - th[:-2])
     cell = model.index(c)[1:-1]
     r = (v * model.length)[1:-1, None]
-    return th[1:-1], om, model.mean_acceleration[cell] * r ** 2, model.mean_velocities[cell] * r
+    # the learned tables in each frame's own branch (a continuous trajectory can be in the other one)
+    sign = zenith_sign(th[1:-1], model.mean_angles[cell])
+    return th[1:-1], om, sign * model.mean_acceleration[cell] * r ** 2, sign * model.mean_velocities[cell] * r
 
 
 def predict_ahead(theta, omega, acc, vel, rho: float, horizon: int):
@@ -119,8 +121,9 @@ def one_step_residuals(model: CyclicMotionModel, angles, starts, step: int = 1, 
     om = np.full_like(th, np.nan)
     om[1:-1] = 0.5 * (th[2:] - th[:-2])
     cell = model.index(c)
-    acc = model.mean_acceleration[cell] * model.acceleration_scale(v)[:, None]
-    vel = model.mean_velocities[cell] * (v * model.length)[:, None]
+    sign = zenith_sign(th, model.mean_angles[cell])         # the tables in each frame's own branch
+    acc = sign * model.mean_acceleration[cell] * model.acceleration_scale(v)[:, None]
+    vel = sign * model.mean_velocities[cell] * (v * model.length)[:, None]
     t = np.arange(1, len(idx) - 2)
     drift = (1 - rho) * vel[t] + 0.5 * acc[t]
     r_th = wrap(th[t + 1] - th[t] - rho * om[t] - drift)
