@@ -76,7 +76,7 @@ def run_tracked(k, motion, camera, out_dir, clothing, seconds):
 def main_tracked(args, motions):
     from depthtrack.errors import InputError
 
-    rows, m = [], 0
+    rows, m = [], args.first_person      # the motions cycle from the first person's
     for k in range(args.first_person, args.first_person + args.people):
         while True:               # motions our BVH reader cannot map are skipped (and said so)
             motion = motions[m % len(motions)]
@@ -111,7 +111,8 @@ def main_tracked(args, motions):
                   f"{100 * summary[name]['segment_error_median_m']:.1f} cm")
 
 
-def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior_weight=1.0):
+def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior_weight=1.0,
+               tile=None, rounds=2, max_iterations=40, fit_scale=True):
     person, info = make_subject(None, "random", k, clothing)
     seq_dir = out_dir / f"person{k:02d}"
     synthesize_bvh(motion, seq_dir, fps=25.0, start=1.0, seconds=frames / 25.0 + 0.2,
@@ -122,7 +123,8 @@ def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior
     pick = np.unique(np.linspace(0, len(poses) - 1, fit_frames).round().astype(int))
     t = time.perf_counter()
     fit = fit_shape(template, seq.camera, [depths[i] for i in pick], [masks[i] for i in pick],
-                    poses[pick], [planes[i] for i in pick], prior_weight=prior_weight)
+                    poses[pick], [planes[i] for i in pick], prior_weight=prior_weight, tile=tile,
+                    rounds=rounds, max_iterations=max_iterations, fit_scale=fit_scale)
     seconds = time.perf_counter() - t
     truth = info["segment_lengths_m"]
     from depthtrack.evaluate.fit import frame_fit
@@ -157,6 +159,11 @@ def main(argv=None):
                     help="motions of depthtrack/data/motion_split.json (tune on dev, report test)")
     ap.add_argument("--fit-frames", type=int, default=4, help="frames given to the shape fit")
     ap.add_argument("--prior-weight", type=float, default=30.0, help="fit_shape's prior_weight")
+    ap.add_argument("--tile", type=int, default=0, help="fit_shape's tile (0 = auto, 1:1 pixels)")
+    ap.add_argument("--rounds", type=int, default=2, help="fit_shape's rounds")
+    ap.add_argument("--max-iterations", type=int, default=40, help="fit_shape's max_iterations")
+    ap.add_argument("--keep-height", action="store_true",
+                    help="fit_scale=False: keep the sequence's height, as the tracker does when given")
     ap.add_argument("--tracked", action="store_true",
                     help="track each clip with the template and with the fitted shape (the tracker's "
                          "own shape fit) and compare joints within 10 cm")
@@ -170,14 +177,15 @@ def main(argv=None):
         return main_tracked(args, motions)
     from depthtrack.errors import InputError
 
-    rows, m = [], 0
-    for k in range(args.people):
+    rows, m = [], args.first_person      # the motions cycle from the first person's
+    for k in range(args.first_person, args.first_person + args.people):
         while True:               # motions our BVH reader cannot map are skipped (and said so)
             motion = motions[m % len(motions)]
             m += 1
             try:
                 row = run_person(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.frames,
-                                 args.fit_frames, args.prior_weight)
+                                 args.fit_frames, args.prior_weight, args.tile or None,
+                                 args.rounds, args.max_iterations, not args.keep_height)
                 break
             except InputError as exc:
                 print(f"skipped {motion.name}: {exc}", file=sys.stderr)
