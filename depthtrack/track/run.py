@@ -85,7 +85,8 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         settings, prior, timings per stage, ``seconds`` and ``processing_fps``, and ``body``
         (:meth:`BodyModel.to_dict` with ``shape_fit``: how the shape fit went, or why not).
 
-    With the shape fit the first :attr:`ShapeSettings.frames` frames are tracked twice:
+    With the shape fit (on sequences of at least :attr:`ShapeSettings.frames` frames)
+    the first :attr:`ShapeSettings.frames` frames are tracked twice:
     once with the template to fit the shape, then, like every frame, with the fitted body
     (so no frame's pose belongs to another body). Its time is in ``timings["shape_fit_s"]``.
     """
@@ -95,8 +96,11 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         raise InputError(seq.path, "--init-from-groundtruth needs groundtruth/joints.csv")
     body, height = body_for_sequence(seq, segmenter, settings=settings)
     shape_info = {"fitted": False, "reason": "off (settings.shape.enabled false)"}
-    if settings.shape.enabled:
-        n = min(settings.shape.frames, len(seq))
+    n = settings.shape.frames
+    if settings.shape.enabled and len(seq) < n:
+        # a clip shorter than the fit's frames would be tracked twice over for little
+        shape_info["reason"] = f"the sequence has {len(seq)} frames, the fit needs {n}"
+    elif settings.shape.enabled:
         body, shape_info = fit_body_shape((seq.depth(i) for i in range(n)), body, seq.camera,
                                           fps=seq.fps, settings=settings, segmenter=segmenter,
                                           fit_scale=not seq.subject_height)
