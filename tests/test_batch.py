@@ -48,7 +48,7 @@ def test_workers_match_serial_and_a_broken_sequence_is_reported(seqs, tmp_path, 
                    "(line 1: Expecting value)"]
     for name in ("wave", "squat"):                       # each task wrote its own track
         assert sorted(p.name for p in (tracks / name / "ep").iterdir()) == [
-            "joints.csv", "poses.npz", "summary.json", "track.bvh"]
+            "body.json", "joints.csv", "poses.npz", "summary.json", "track.bvh"]
     assert not [p for p in tracks.rglob(".*")]          # no temporaries left
 
 

@@ -210,8 +210,8 @@ def test_export_cli_raw_and_smoothed(track, tmp_path, capsys):
     smooth = json.loads((out / "joints_smoothed.json").read_text())
     assert raw != smooth and smooth["frames"][MISSING]["joints"]["head"] is None
     # the raw track is untouched
-    assert sorted(p.name for p in track["dir"].iterdir()) == ["joints.csv", "poses.npz", "summary.json",
-                                                              "track.bvh"]
+    assert sorted(p.name for p in track["dir"].iterdir()) == ["body.json", "joints.csv", "poses.npz",
+                                                              "summary.json", "track.bvh"]
     # bad input: one line, exit 2, nothing written
     capsys.readouterr()
     for argv in (["--format", "fbx"], ["--smooth", "savgol:4"], ["--up", "x"]):

@@ -22,7 +22,8 @@ def test_write_read_track(tmp_path):
     out = tmp_path / "out"
     write_track(out, joints, poses, body.pose_names, body, 25.0,
                 {"method": "hill-climb", "settings": {"particles": 64}, "seconds": 1.5})
-    assert sorted(p.name for p in out.iterdir()) == ["joints.csv", "poses.npz", "summary.json", "track.bvh"]
+    assert sorted(p.name for p in out.iterdir()) == ["body.json", "joints.csv", "poses.npz", "summary.json",
+                                                       "track.bvh"]
     track = read_track(out)
     np.testing.assert_allclose(track.joints, joints, atol=1e-6)
     np.testing.assert_array_equal(track.poses, poses)

@@ -35,24 +35,84 @@ CAMERAS = ("sr4000", "kinect-v2")
 
 def track_first_frames(seq, body, frames):
     """Poses, masks, floor planes and depths of the first ``frames`` frames tracked with "hc"."""
-    tracker = Tracker(body, seq.camera, method="hc", fps=seq.fps)
-    try:
-        depths = [seq.depth(i) for i in range(min(frames, len(seq)))]
-        poses, masks, planes = [tracker.init(depths[0])], [], []
-        masks.append(tracker.foreground.mask.copy())
-        planes.append(tracker.foreground.floor_plane)
-        for d in depths[1:]:
-            poses.append(tracker.step(d))
-            masks.append(tracker.foreground.mask.copy())
-            planes.append(tracker.foreground.floor_plane)
-    finally:
-        for r in (tracker.coarse_renderer, tracker.fine_renderer, tracker._frame_renderer):
-            if r is not None:
-                r.release()
-    return np.array(poses), masks, planes, depths
+    from depthtrack.detect import segment_foreground
+
+    depths = [seq.depth(i) for i in range(min(frames, len(seq)))]
+    with Tracker(body, seq.camera, method="hc", fps=seq.fps) as tracker:
+        poses = [tracker.init(depths[0])] + [tracker.step(d) for d in depths[1:]]
+    fgs = [segment_foreground(d, seq.camera) for d in depths]
+    return np.array(poses), [f.mask for f in fgs], [f.floor_plane for f in fgs], depths
 
 
-def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior_weight=1.0):
+def run_tracked(k, motion, camera, out_dir, clothing, seconds):
+    """Person ``k`` tracked with the template body and with the fitted shape (module docstring)."""
+    import dataclasses
+
+    from depthtrack.evaluate.metrics import fraction_within, point_errors
+    from depthtrack.track import TrackerSettings, run_tracking
+
+    person, info = make_subject(None, "random", k, clothing)
+    seq_dir = out_dir / f"person{k:02d}"
+    synthesize_bvh(motion, seq_dir, fps=25.0, start=1.0, seconds=seconds, camera=camera,
+                   noise="tof", seed=k, body=person, subject=info)
+    seq = open_sequence(seq_dir)
+    truth = info["segment_lengths_m"]
+    row = {"person": k, "motion": Path(motion).name, "camera": camera,
+           "height_m": info["height_m"], "frames": len(seq)}
+    base = TrackerSettings()
+    for name, on in (("template", False), ("fitted", True)):
+        settings = base.replace(shape=dataclasses.replace(base.shape, enabled=on))
+        t = time.perf_counter()
+        result, body, summary = run_tracking(seq, settings=settings)
+        err = point_errors(result.joints, seq.joints)
+        row[name] = {"within_10cm": round(fraction_within(err), 4),
+                     "mean_error_m": round(float(np.nanmean(np.where(np.isinf(err), np.nan, err))), 4),
+                     "segment_errors_m": length_errors(body.segment_lengths(), truth),
+                     "shape_fit_s": summary["timings"]["shape_fit_s"],
+                     "seconds": round(time.perf_counter() - t, 1)}
+    return row
+
+
+def main_tracked(args, motions):
+    from depthtrack.errors import InputError
+
+    rows, m = [], args.first_person      # the motions cycle from the first person's
+    for k in range(args.first_person, args.first_person + args.people):
+        while True:               # motions our BVH reader cannot map are skipped (and said so)
+            motion = motions[m % len(motions)]
+            m += 1
+            try:
+                row = run_tracked(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.seconds)
+                break
+            except InputError as exc:
+                print(f"skipped {motion.name}: {exc}", file=sys.stderr)
+        rows.append(row)
+        t, f = row["template"], row["fitted"]
+        print(f"person {k:2d} {row['motion']:12s} {row['camera']:9s} h {row['height_m']:.2f} m: "
+              f"within 10 cm template {t['within_10cm']:.1%} fitted {f['within_10cm']:.1%}; "
+              f"segment error median template "
+              f"{100 * np.median(np.abs(list(t['segment_errors_m'].values()))):.1f} cm fitted "
+              f"{100 * np.median(np.abs(list(f['segment_errors_m'].values()))):.1f} cm; shape fit "
+              f"{f['shape_fit_s']:.0f} s", file=sys.stderr, flush=True)
+    summary = {"people": len(rows), "split": args.split, "clothing": args.clothing,
+               "seconds": args.seconds}
+    for name in ("template", "fitted"):
+        summary[name] = {
+            "within_10cm_mean": round(float(np.mean([r[name]["within_10cm"] for r in rows])), 4),
+            "segment_error_median_m": round(float(np.median(np.abs(
+                [v for r in rows for v in r[name]["segment_errors_m"].values()]))), 4)}
+    summary["rows"] = rows
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    else:
+        for name in ("template", "fitted"):
+            print(f"{name}: joints within 10 cm {summary[name]['within_10cm_mean']:.1%} (mean over "
+                  f"people), median |segment length error| "
+                  f"{100 * summary[name]['segment_error_median_m']:.1f} cm")
+
+
+def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior_weight=1.0,
+               tile=None, rounds=2, max_iterations=40, fit_scale=True):
     person, info = make_subject(None, "random", k, clothing)
     seq_dir = out_dir / f"person{k:02d}"
     synthesize_bvh(motion, seq_dir, fps=25.0, start=1.0, seconds=frames / 25.0 + 0.2,
@@ -63,7 +123,8 @@ def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior
     pick = np.unique(np.linspace(0, len(poses) - 1, fit_frames).round().astype(int))
     t = time.perf_counter()
     fit = fit_shape(template, seq.camera, [depths[i] for i in pick], [masks[i] for i in pick],
-                    poses[pick], [planes[i] for i in pick], prior_weight=prior_weight)
+                    poses[pick], [planes[i] for i in pick], prior_weight=prior_weight, tile=tile,
+                    rounds=rounds, max_iterations=max_iterations, fit_scale=fit_scale)
     seconds = time.perf_counter() - t
     truth = info["segment_lengths_m"]
     from depthtrack.evaluate.fit import frame_fit
@@ -98,20 +159,33 @@ def main(argv=None):
                     help="motions of depthtrack/data/motion_split.json (tune on dev, report test)")
     ap.add_argument("--fit-frames", type=int, default=4, help="frames given to the shape fit")
     ap.add_argument("--prior-weight", type=float, default=30.0, help="fit_shape's prior_weight")
+    ap.add_argument("--tile", type=int, default=0, help="fit_shape's tile (0 = auto, 1:1 pixels)")
+    ap.add_argument("--rounds", type=int, default=2, help="fit_shape's rounds")
+    ap.add_argument("--max-iterations", type=int, default=40, help="fit_shape's max_iterations")
+    ap.add_argument("--keep-height", action="store_true",
+                    help="fit_scale=False: keep the sequence's height, as the tracker does when given")
+    ap.add_argument("--tracked", action="store_true",
+                    help="track each clip with the template and with the fitted shape (the tracker's "
+                         "own shape fit) and compare joints within 10 cm")
+    ap.add_argument("--seconds", type=float, default=2.0, help="clip length with --tracked")
+    ap.add_argument("--first-person", type=int, default=0, help="first shape seed with --tracked")
     args = ap.parse_args(argv)
     split = json.loads((Path(__file__).resolve().parents[1] / "depthtrack" / "data"
                         / "motion_split.json").read_text())
     motions = [args.data / m for m in split[args.split]]
+    if args.tracked:
+        return main_tracked(args, motions)
     from depthtrack.errors import InputError
 
-    rows, m = [], 0
-    for k in range(args.people):
+    rows, m = [], args.first_person      # the motions cycle from the first person's
+    for k in range(args.first_person, args.first_person + args.people):
         while True:               # motions our BVH reader cannot map are skipped (and said so)
             motion = motions[m % len(motions)]
             m += 1
             try:
                 row = run_person(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.frames,
-                                 args.fit_frames, args.prior_weight)
+                                 args.fit_frames, args.prior_weight, args.tile or None,
+                                 args.rounds, args.max_iterations, not args.keep_height)
                 break
             except InputError as exc:
                 print(f"skipped {motion.name}: {exc}", file=sys.stderr)

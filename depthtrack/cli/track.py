@@ -19,6 +19,7 @@ _EPILOG = """methods (the ToF paper's experiments):
 examples:
   depthtrack track seq_walk -o track_walk
   depthtrack track seq_walk -o track_walk --method hc --likelihood pixel --overlay walk.mp4
+  depthtrack track seq_walk -o track_walk --shape-fit on       # fit the person's proportions
   depthtrack track recording.mkv -o track_kinect
   depthtrack track realsense.bag -o track_rs --topic /device_0/sensor_0/Depth_0/image/data
 
@@ -26,10 +27,14 @@ SEQ is any readable recording: a sequence directory or .npz, an Azure Kinect / F
 a ROS 1 .bag, a ROS 2 bag directory, a TUM RGB-D folder (see "reading recordings").
   depthtrack track seq_walk -o track_walk --export glb,c3d,json --smooth savgol:9
 
-OUT gets joints.csv, poses.npz, track.bvh and summary.json (method, settings, body height
-and where it came from, timings per stage, frames per second). The body height is read
-from sequence.json (subject.height_m), or else fitted to the first frame with a person by
-the likelihood (a few seconds). After the automatic start, the pose and its twin facing
+OUT gets joints.csv, poses.npz, track.bvh, body.json (the fitted body: height, shape,
+segment lengths; depthtrack.BodyModel.from_json reads it) and summary.json (method,
+settings, body height and where it came from, the shape fit, timings per stage, frames per
+second). The body height is read from sequence.json (subject.height_m), or else fitted to
+the first frame with a person by the likelihood (a few seconds). With --shape-fit on the
+person's proportions and girth are then fitted to four of the first 16 frames, tracked
+with the template, and the whole sequence is tracked with the fitted body (off by default:
+on the dev motions it did not track better; see the README, "Body shape"). After the automatic start, the pose and its twin facing
 the other way are both tracked for ten frames and the better kept (a depth image barely
 tells front from back). Frames without a person (an empty room, the subject gone) get no
 pose; tracking starts again when someone appears. --export also writes OUT/exports/
@@ -56,6 +61,9 @@ def register(subparsers) -> None:
     p.add_argument("--init-from-groundtruth", action="store_true",
                    help="ABLATION ONLY: start from a pose fitted to the ground-truth joints of "
                         "frame 0 instead of the automatic initialisation (recorded in summary.json)")
+    p.add_argument("--shape-fit", choices=("on", "off"), default="off",
+                   help="on: fit the body's shape (segment lengths, widths, girth) to the first "
+                        "16 frames before tracking; off (default): the template's proportions")
     from .export import add_export_options
     add_export_options(p, "--export", "also write these formats into OUT/exports/: glb, gltf, c3d, json, "
                                       "bvh, csv (comma-separated; see `depthtrack export`)")
@@ -86,6 +94,16 @@ def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
     write_text_atomic(out / "summary.json", summary_json_text(written_summary))
 
 
+def _settings(args):
+    """The tracker settings the options ask for."""
+    import dataclasses
+
+    from ..track.settings import TrackerSettings
+
+    s = TrackerSettings()
+    return s.replace(shape=dataclasses.replace(s.shape, enabled=args.shape_fit == "on"))
+
+
 def run(args) -> int:
     from ..io.sequence import open_sequence
     from ..progress import Progress
@@ -110,7 +128,7 @@ def run(args) -> int:
     with Progress(len(seq), "frames", quiet=args.quiet) as progress:
         result, body, summary = run_tracking(seq, method=args.method, likelihood=args.likelihood,
                                              init_from_groundtruth=args.init_from_groundtruth,
-                                             progress=progress)
+                                             progress=progress, settings=_settings(args))
     from ..io.track_output import write_track
 
     summary["sequence"] = str(seq.path)

@@ -7,6 +7,8 @@
                        body_offsets (J, 3), fps
     OUT/track.bvh      the motion on our skeleton, y up (see depthtrack.io.bvh.write_bvh)
     OUT/summary.json   method, settings, frames, seconds, fps, ... (whatever the caller adds)
+    OUT/body.json      the body the poses belong to (BodyModel.to_json; BodyModel.from_json
+                       rebuilds it): height, shape, segment lengths
 
 The directory is written as a whole and renamed into place, so a failed run leaves
 no partial output.
@@ -105,6 +107,8 @@ def write_track(out_dir, joints, poses, pose_names, body, fps: float, summary: d
         if filled is not None:
             write_bvh(tmp / "track.bvh", body, filled, fps)
         (tmp / "summary.json").write_text(summary_json_text(summary))
+        if hasattr(body, "to_json"):
+            (tmp / "body.json").write_text(body.to_json())
     return out_dir
 
 

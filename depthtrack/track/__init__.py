@@ -17,11 +17,11 @@ A frame is a pipeline of stages over a :class:`TrackingState` (:mod:`.state`):
 """
 from .association import associate, expand_correspondences, prune_explained
 from .evidence import PartModel, iterated_unscented_update, propagate_evidence, sigma_points
-from .height import body_for_sequence, fit_body_height
+from .height import body_for_sequence, fit_body_height, fit_body_shape
 from .hill_climb import HillClimber, SearchGroup, default_blocks
 from .settings import (AssociateSettings, EnergySettings, HeadingSettings, HeightSettings,
                        JudgeSettings, ObserveSettings, PolishSettings, SearchSettings,
-                       StartSettings, TrackerSettings)
+                       ShapeSettings, StartSettings, TrackerSettings)
 from .state import TrackedFrame, TrackingState, TrackResult
 from .tracker import LIKELIHOODS, METHODS, Tracker  # before .loop and .run (it re-exports them)
 from .loop import track_stream  # noqa: E402
@@ -33,4 +33,5 @@ __all__ = ["Tracker", "TrackerSettings", "TrackResult", "TrackingState", "Tracke
            "propagate_evidence", "iterated_unscented_update", "sigma_points", "associate",
            "prune_explained", "expand_correspondences", "ObserveSettings", "EnergySettings",
            "SearchSettings", "AssociateSettings", "PolishSettings", "JudgeSettings",
-           "StartSettings", "HeadingSettings", "HeightSettings"]
+           "StartSettings", "HeadingSettings", "HeightSettings", "ShapeSettings",
+           "fit_body_shape"]

@@ -1,7 +1,10 @@
-"""The body for a sequence: its height from ``sequence.json``, else fitted by the likelihood.
+"""The body for a sequence: its height from ``sequence.json``, else fitted by the likelihood;
+then its shape, fitted to the first frames (:func:`fit_body_shape`).
 
 Every height tried is scored with one set of renderers (bodies of any height share the
-default mesh; :meth:`~.renderers.RendererSet.set_body`), released when the fit ends.
+default mesh; :meth:`~.renderers.RendererSet.set_body`), released when the fit ends. The
+shape fit tracks the first frames with a tracker of its own and fits with one renderer of
+its own (:func:`~.shape_fit.fit_shape`); both are released before it returns.
 """
 from __future__ import annotations
 
@@ -134,3 +137,66 @@ def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_he
         return BodyModel.default(height=guess), {"height_m": round(guess, 3),
                                                  "source": "estimated from the first frame's foreground"}
     return fit_body_height(depth, fg, seq.camera, fps=seq.fps, settings=settings, segmenter=segmenter)
+
+
+def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segmenter=None,
+                   fit_scale: bool = True, log=None):
+    """The body with the shape (and, with ``fit_scale``, the size) that explains the first
+    frames best; no ground truth.
+
+    The frames are tracked ("hc", the automatic start and the front/back check included)
+    with ``body``; :attr:`ShapeSettings.fit_frames` of the frames that got a pose (spread
+    evenly) go with the tracker's poses, their segmentation and floor plane to
+    :func:`~.shape_fit.fit_shape` on the full mesh (the decimated one misplaces the
+    forearm by centimetres).
+
+    Parameters
+    ----------
+    frames : sequence of (H, W) float
+        The first frames (:attr:`ShapeSettings.frames` of them).
+    body : BodyModel
+        The template at the subject's height (given or fitted).
+    camera : Camera
+    fit_scale : bool
+        Also fit the size; False when the height is given.
+
+    Returns
+    -------
+    body : BodyModel
+        The fitted body (``body`` itself when too few frames had a person: ``info`` says so).
+    info : dict
+        ``fitted`` (bool), ``frames_tracked``, ``frames_used``, ``seconds`` (tracking and
+        fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``.
+    """
+    from .shape_fit import fit_shape
+    from .tracker import Tracker
+
+    s = (settings or TrackerSettings()).shape
+    if segmenter is None:
+        from ..detect import segment_foreground as segmenter
+    t0 = time.perf_counter()
+    depths = [np.asarray(d, dtype=np.float32) for d in frames]
+    with Tracker(body, camera, method="hc", fps=fps, settings=settings,
+                 segmenter=segmenter) as tracker:
+        tracked = [(i, x) for i, x in tracker.stream(depths) if x is not None]
+    info = {"fitted": False, "frames_tracked": len(depths)}
+    if len(tracked) < s.fit_frames:
+        info.update(reason=f"{len(tracked)} of the first {len(depths)} frames got a pose; "
+                           f"the fit needs {s.fit_frames}",
+                    seconds=round(time.perf_counter() - t0, 2))
+        return body, info
+    pick = np.unique(np.linspace(0, len(tracked) - 1, s.fit_frames).round().astype(int))
+    index = [tracked[k][0] for k in pick]
+    poses = np.array([tracked[k][1] for k in pick])
+    fgs = [segmenter(depths[i], camera) for i in index]
+    try:
+        full = body.with_mesh("full")
+    except ValueError:
+        full = body
+    fit = fit_shape(full, camera, [depths[i] for i in index], [f.mask for f in fgs], poses,
+                    [f.floor_plane for f in fgs], tile=s.tile or None, rounds=s.rounds,
+                    max_iterations=s.max_iterations, prior_weight=s.prior_weight,
+                    fit_scale=fit_scale, log=log)
+    info.update(fitted=True, frames_used=index, **fit.to_dict())
+    info.update(fit_seconds=info.pop("seconds"), seconds=round(time.perf_counter() - t0, 2))
+    return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info

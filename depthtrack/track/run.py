@@ -10,7 +10,8 @@ from ..body.rotations import matrix_to_rotvec
 from ..body.skeleton import TORSO_CONTRACT_JOINTS
 from ..contract import JOINT_INDEX
 from ..errors import InputError
-from .height import body_for_sequence
+from .height import body_for_sequence, fit_body_shape
+from .settings import TrackerSettings
 from .tracker import Tracker
 
 #: Contract-joint indices of the torso (the root's rigid frame).
@@ -77,14 +78,32 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
     -------
     result : TrackResult
     body : BodyModel
+        The body the poses belong to: the template at the given or fitted height, then
+        (:attr:`TrackerSettings.shape` enabled) the shape fitted to the first frames.
     summary : dict
         For ``summary.json``: method, likelihood, initialisation, body height and its source,
-        settings, prior, timings per stage, ``seconds`` and ``processing_fps``.
+        settings, prior, timings per stage, ``seconds`` and ``processing_fps``, and ``body``
+        (:meth:`BodyModel.to_dict` with ``shape_fit``: how the shape fit went, or why not).
+
+    With the shape fit (on sequences of at least :attr:`ShapeSettings.frames` frames)
+    the first :attr:`ShapeSettings.frames` frames are tracked twice:
+    once with the template to fit the shape, then, like every frame, with the fitted body
+    (so no frame's pose belongs to another body). Its time is in ``timings["shape_fit_s"]``.
     """
     init_pose = None
+    settings = settings or TrackerSettings()
     if init_from_groundtruth and seq.joints is None:
         raise InputError(seq.path, "--init-from-groundtruth needs groundtruth/joints.csv")
     body, height = body_for_sequence(seq, segmenter, settings=settings)
+    shape_info = {"fitted": False, "reason": "off (settings.shape.enabled false)"}
+    n = settings.shape.frames
+    if settings.shape.enabled and len(seq) < n:
+        # a clip shorter than the fit's frames would be tracked twice over for little
+        shape_info["reason"] = f"the sequence has {len(seq)} frames, the fit needs {n}"
+    elif settings.shape.enabled:
+        body, shape_info = fit_body_shape((seq.depth(i) for i in range(n)), body, seq.camera,
+                                          fps=seq.fps, settings=settings, segmenter=segmenter,
+                                          fit_scale=not seq.subject_height)
     if init_from_groundtruth:
         init_pose = fit_pose_to_joints(body, seq.joints[0])
     with Tracker(body, seq.camera, method=method, likelihood=likelihood, fps=seq.fps,
@@ -93,6 +112,9 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         result = tracker.track_sequence(seq, progress=progress, init_pose=init_pose)
         seconds = time.perf_counter() - t0
     info = result.info
+    source = height["source"]
+    if shape_info["fitted"] and not seq.subject_height:
+        source += "; then scaled with the shape fitted to the first frames"
     summary = {
         "method": method,
         "likelihood": likelihood,
@@ -100,14 +122,15 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "initialisation": ("ground truth of frame 0 (ABLATION: --init-from-groundtruth)"
                            if init_from_groundtruth else "automatic (no ground truth used)"),
         "initialisation_details": info["initialisation"],
-        "body_height_m": height["height_m"],
-        "body_height_source": height["source"],
+        "body_height_m": round(float(body.height), 3) if shape_info["fitted"] else height["height_m"],
+        "body_height_source": source,
         "body_height_fit": {k: v for k, v in height.items() if k not in ("height_m", "source")} or None,
         "seconds": round(seconds, 3),
         "processing_fps": round(len(seq) / seconds, 3) if seconds > 0 else None,
-        "timings": result.timings,
+        "timings": {**result.timings, "shape_fit_s": shape_info.get("seconds", 0.0)},
         "counts": info["counts"],
         "settings": info["settings"],
         "prior": info["prior"],
+        "body": {**body.to_dict(), "height_source": source, "shape_fit": shape_info},
     }
     return result, body, summary

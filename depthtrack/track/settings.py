@@ -3,7 +3,8 @@
 :class:`TrackerSettings` nests one group per stage of a frame (see :mod:`.tracker` for the
 stages): ``observe``, ``energy``, ``search``, ``associate``, ``polish``, ``judge``, and the
 starts: ``start`` (the global search of the first frame and of a recovery), ``heading``
-(the front/back check after an automatic start) and ``height`` (the body-height fit).
+(the front/back check after an automatic start), ``height`` (the body-height fit) and
+``shape`` (the body-shape fit from the first frames).
 Every number of the search schedule lives here; ``TrackerSettings.to_dict()`` is written
 whole into ``summary.json``. One set serves every sequence; never tune it per clip.
 
@@ -313,10 +314,46 @@ class HeightSettings:
         _positive(self, "steps", "walk", allow_zero=True)
 
 
+@dataclass(frozen=True)
+class ShapeSettings:
+    """The body-shape fit from the first frames (:func:`~.height.fit_body_shape`).
+
+    The first ``frames`` frames are tracked ("hc") with the template body, ``fit_frames``
+    of them (spread evenly) go to :func:`~.shape_fit.fit_shape` with the tracker's poses,
+    and the whole sequence is then tracked with the fitted body. ``tile`` bounds the fit's
+    renderer (0 = one camera pixel per tile pixel, up to 256: slow on llvmpipe); ``rounds``
+    and ``max_iterations`` its search; ``prior_weight`` its population prior.
+    ``enabled`` False (the default) = the template body (at the given or fitted height):
+    on the dev motions the fit cost up to 6 points of joints within 10 cm and did not bring
+    the segment lengths closer (README, "Body shape").
+    """
+
+    enabled: bool = False
+    frames: int = 16
+    fit_frames: int = 4
+    tile: int = 64
+    rounds: int = 1
+    max_iterations: int = 20
+    prior_weight: float = 30.0
+
+    def __post_init__(self):
+        _check(isinstance(self.enabled, bool), f"ShapeSettings.enabled must be true or false, "
+                                               f"not {self.enabled!r}")
+        _check(int(self.fit_frames) >= 1, f"ShapeSettings.fit_frames must be at least 1, "
+                                          f"not {self.fit_frames!r}")
+        _check(int(self.frames) >= int(self.fit_frames),
+               f"ShapeSettings.frames must be at least fit_frames ({self.fit_frames}), "
+               f"not {self.frames!r}")
+        _power_of_two(self.tile, "ShapeSettings.tile", zero_ok=True)
+        _positive(self, "rounds", "max_iterations")
+        _positive(self, "prior_weight", allow_zero=True)
+
+
 #: Group name -> settings class, in the order of a frame.
 GROUPS = {"observe": ObserveSettings, "energy": EnergySettings, "search": SearchSettings,
           "associate": AssociateSettings, "polish": PolishSettings, "judge": JudgeSettings,
-          "start": StartSettings, "heading": HeadingSettings, "height": HeightSettings}
+          "start": StartSettings, "heading": HeadingSettings, "height": HeightSettings,
+          "shape": ShapeSettings}
 
 #: The earlier flat setting names -> (group, field).
 FLAT_NAMES = {
@@ -361,6 +398,7 @@ class TrackerSettings:
     start: StartSettings = field(default_factory=StartSettings)
     heading: HeadingSettings = field(default_factory=HeadingSettings)
     height: HeightSettings = field(default_factory=HeightSettings)
+    shape: ShapeSettings = field(default_factory=ShapeSettings)
 
     def __init__(self, **kwargs):
         groups = {}

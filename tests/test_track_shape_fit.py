@@ -1,0 +1,102 @@
+"""The tracker fits the body shape to its first frames, writes body.json, and frees its GL objects."""
+import dataclasses
+import gc
+
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.body.shape import BodyShape, length_errors
+
+render = pytest.importorskip("depthtrack.render")
+
+#: A person several s.d. from the template in most fields (as tests/test_body_shape_fit.py).
+TRUTH = BodyShape(upper_arm=1.06, forearm=0.95, thigh=1.07, shin=0.95, torso=0.95, neck_head=1.05,
+                  shoulder_width=1.08, hip_width=1.1, foot=1.0, limb_girth=1.15, torso_girth=1.1)
+
+
+@pytest.fixture(scope="module")
+def shaped_sequence(tmp_path_factory):
+    try:
+        render.gl_context()
+    except render.GLUnavailableError as exc:
+        pytest.skip(f"no OpenGL: {exc}")
+    from depthtrack.io.sequence import open_sequence
+    from depthtrack.synth.generate import synthesize
+    from depthtrack.synth.procedural import procedural_motion
+
+    truth = BodyModel.default(1.75, shape=TRUTH)
+    squat = procedural_motion("squat", truth, 25.0)
+    out = tmp_path_factory.mktemp("shaped") / "seq"
+    subject = {"height_m": 1.75, "segment_lengths_m": truth.segment_lengths()}
+    synthesize(out, truth, squat[40:70:6], 25.0, camera="sr4000", noise="none", subject=subject)
+    return open_sequence(out), truth
+
+
+def _settings(enabled=True):
+    from depthtrack.track import ShapeSettings, TrackerSettings
+
+    # noise-free frames: a weak prior (the default 30 was chosen on noisy dev sequences and
+    # pulls this person, about 2 s.d. from average in several fields, toward the template)
+    return TrackerSettings(heading_frames=0, shape=ShapeSettings(enabled=enabled, frames=5,
+                                                                 fit_frames=4, prior_weight=1.0))
+
+
+@pytest.mark.slow
+def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, tmp_path):
+    from test_track_stream_gl import _drain, _live_gl_objects
+
+    from depthtrack.io.track_output import read_track, write_track
+    from depthtrack.track import run_tracking
+
+    seq, truth = shaped_sequence
+    ctx = render.gl_context()
+    mode = ctx.gc_mode
+    ctx.gc_mode = "context_gc"          # collected GL objects land in ctx.objects
+    _drain(ctx)
+    try:
+        start = _live_gl_objects()
+        result, body, summary = run_tracking(seq, method="hc", settings=_settings())
+        assert _live_gl_objects() == start
+        gc.collect()
+        assert _drain(ctx) == 0, "GL objects were dropped without release()"
+    finally:
+        _drain(ctx)
+        ctx.gc_mode = mode
+    fit = summary["body"]["shape_fit"]
+    assert fit["fitted"] and len(fit["frames_used"]) == 4 and fit["energy"] < fit["start_energy"]
+    assert summary["settings"]["shape"]["frames"] == 5
+    assert summary["body_height_m"] == pytest.approx(1.75)      # given: not rescaled
+    assert summary["body"]["shape"] == body.shape.to_dict() and not body.shape.is_average
+    # the fitted lengths are closer to the person's than the template's
+    want = truth.segment_lengths()
+    before = np.abs(list(length_errors(BodyModel.default(1.75).segment_lengths(), want).values()))
+    after = np.abs(list(length_errors(body.segment_lengths(), want).values()))
+    assert np.median(after) < np.median(before) and after.sum() < 0.8 * before.sum(), (before, after)
+    # body.json: from_json rebuilds the body the poses belong to
+    write_track(tmp_path / "out", result.joints, result.poses, body.pose_names, body, seq.fps, summary)
+    back = BodyModel.from_json(tmp_path / "out" / "body.json")
+    np.testing.assert_allclose(back.joint_positions(result.poses), result.joints, atol=1e-9)
+    assert read_track(tmp_path / "out").summary["body"]["shape_fit"]["fitted"]
+
+
+def test_shape_fit_option_sets_the_settings():
+    from types import SimpleNamespace
+
+    from depthtrack.cli.track import _settings
+
+    assert _settings(SimpleNamespace(shape_fit="off")).shape.enabled is False
+    assert _settings(SimpleNamespace(shape_fit="on")).shape.enabled is True
+
+
+def test_shape_settings_are_validated():
+    from depthtrack.errors import InputError
+    from depthtrack.track import ShapeSettings, TrackerSettings
+
+    for bad in ({"frames": 2, "fit_frames": 4}, {"tile": 100}, {"fit_frames": 0},
+                {"enabled": "yes"}, {"prior_weight": -1.0}):
+        with pytest.raises(InputError):
+            ShapeSettings(**bad)
+    s = TrackerSettings(shape={"enabled": False, "frames": 8})    # as summary.json holds it
+    assert s.shape == dataclasses.replace(ShapeSettings(), enabled=False, frames=8)
+    assert TrackerSettings(**{"shape": s.to_dict()["shape"]}).shape == s.shape
