@@ -1,11 +1,19 @@
-"""The front/back check after an automatic start: track the pose and its turned twin, keep the better.
+"""Front or back: the check after an automatic start, and the recheck while tracking.
 
 A depth image barely tells a body's front from its back, and the start's heading prior
 assumes the person faces the camera. Motion does tell them apart: knees and elbows bend one
-way only. Both hypotheses are tracked through the next :attr:`HeadingSettings.frames`
-frames, each from a copy of the start state; the turned one is kept only when its fit
-explains the frames clearly better (mean unexplained share lower by
-:attr:`HeadingSettings.margin`).
+way only. After a start both hypotheses are tracked through the next
+:attr:`HeadingSettings.frames` frames, each from a copy of the start state; the turned one
+is kept only when its fit explains the frames clearly better (mean unexplained share lower
+by :attr:`HeadingSettings.margin`).
+
+That check sees ten frames once: a start while the limbs are straight (the two twins
+explain them equally well) decides by noise, and a wrong decision used to stand for the
+whole clip. So the question stays open while tracking (:func:`recheck_heading`): every
+:attr:`HeadingSettings.every` frames the tracked pose is compared with its turned twin
+climbed on that frame, by the energy without the motion prior (the likelihood plus the pose
+prior, which charges a twin for the bent-backwards joints it needs), and the twin takes
+over after :attr:`HeadingSettings.votes` clear wins in a row.
 """
 from __future__ import annotations
 
@@ -13,6 +21,7 @@ import numpy as np
 
 from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
 from ..body.skeleton import MODEL_UP
+from ..contract import JOINT_INDEX, JOINT_NAMES
 
 
 def turned_pose(pose):
@@ -23,6 +32,26 @@ def turned_pose(pose):
     axis = R @ MODEL_UP
     x[3:6] = matrix_to_rotvec((rotation_about(axis, np.pi) @ R)[None])[0]
     return x
+
+
+#: Contract joint order with left and right exchanged.
+SIDES_SWAPPED = [JOINT_INDEX[n.replace("l_", "#").replace("r_", "l_").replace("#", "r_")]
+                 for n in JOINT_NAMES]
+
+
+def swapped_twin(body, pose):
+    """``pose (48,)``'s twin with the joints left where they are and left and right
+    exchanged: the body facing the other way, its limbs where the image put them.
+
+    The twin of a mirrored track: a body seen from behind explains the depth image of one
+    facing the camera with each limb taken by the other side's (hips and shoulders bent
+    backwards where needed). Turning the pose (:func:`turned_pose`) would also turn every
+    limb away from where the image shows it; exchanging the sides keeps them.
+    """
+    from .run import fit_pose_to_joints
+
+    joints = np.asarray(body.joint_positions(np.asarray(pose, dtype=np.float64)))
+    return fit_pose_to_joints(body, joints[SIDES_SWAPPED])
 
 
 def settle_heading(start, depths, track, turn, settings):
@@ -61,3 +90,45 @@ def settle_heading(start, depths, track, turn, settings):
         "frames": len(depths), "unexplained_initial": round(cost_a, 4),
         "unexplained_turned": None if cost_b is None else round(cost_b, 4), "kept": choice}}
     return state.replace(init_info=info), poses
+
+
+def recheck_heading(state, pose, score, twin, pixels: float, settings):
+    """The heading recheck of one frame (module docstring): keep ``pose`` or its turned twin.
+
+    Parameters
+    ----------
+    state : TrackingState
+        Before this frame is logged (``state.frame`` is this frame's index).
+    pose : (48,) float
+        The frame's tracked pose.
+    score : callable ``(pose (48,)) -> float``
+        The energy without the motion prior on this frame.
+    twin : callable ``(pose (48,)) -> (pose (48,), float)``
+        The other-facing twin of a pose (:func:`swapped_twin`) climbed on this frame, and
+        its ``score``.
+    pixels : float
+        The foreground's pixel count (the margin's scale).
+    settings : TrackerSettings
+
+    Returns
+    -------
+    pose : (48,) float
+        The twin when it took over, else ``pose``.
+    changes : dict
+        For the state (``heading_votes``, ``heading_switches``).
+    switched : bool
+    """
+    h = settings.heading
+    if h.every <= 0 or state.frame % h.every:
+        return pose, {}, False
+    e_pose = float(score(pose))
+    y, e_twin = twin(pose)
+    if not e_twin < e_pose - h.recheck_margin * pixels:
+        return pose, {"heading_votes": 0}, False
+    votes = state.heading_votes + 1
+    if votes < h.votes:
+        return pose, {"heading_votes": votes}, False
+    switch = {"frame": state.frame, "energy_kept": round(e_pose, 1),
+              "energy_turned": round(float(e_twin), 1)}
+    return np.asarray(y, dtype=np.float64), {
+        "heading_votes": 0, "heading_switches": state.heading_switches + (switch,)}, True

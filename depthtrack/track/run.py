@@ -107,6 +107,8 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "processing_fps": round(len(seq) / seconds, 3) if seconds > 0 else None,
         "timings": result.timings,
         "counts": info["counts"],
+        "recoveries": info["recoveries"],
+        "heading_switches": info["heading_switches"],
         "settings": info["settings"],
         "prior": info["prior"],
     }
