@@ -45,18 +45,22 @@ def test_recheck_switches_after_enough_votes_only():
     s = TrackerSettings()
     h = s.heading
     state = TrackingState(log=({},) * h.every)          # a frame the recheck runs on
-    better = lambda pose: (pose + 1.0, 100.0)           # noqa: E731
-    x, changes, switched = recheck_heading(state, np.zeros(48), lambda p: 200.0, better,
-                                           1000.0, s)
+    twin = lambda pose: pose + 1.0                      # noqa: E731
+    # the pose (all zeros) refits to energy 200, its twin (all ones) to 100
+    refit = lambda pose: (pose, 100.0 if pose[0] else 200.0)  # noqa: E731
+    x, changes, switched = recheck_heading(state, np.zeros(48), refit, twin, 1000.0, s)
     assert not switched and changes["heading_votes"] == 1 and not x.any()
     state = state.replace(heading_votes=h.votes - 1)
-    x, changes, switched = recheck_heading(state, np.zeros(48), lambda p: 200.0, better,
-                                           1000.0, s)
+    x, changes, switched = recheck_heading(state, np.zeros(48), refit, twin, 1000.0, s)
     assert switched and (x == 1.0).all() and changes["heading_switches"][0]["frame"] == h.every
     # within the margin: no vote, and the votes start over
-    close = lambda pose: (pose, 200.0 - 0.5 * h.recheck_margin * 1000.0)  # noqa: E731
-    _, changes, switched = recheck_heading(state, np.zeros(48), lambda p: 200.0, close, 1000.0, s)
+    close = lambda pose: (pose, 200.0 - (0.5 * h.recheck_margin * 1000.0 if pose[0] else 0))  # noqa: E731
+    _, changes, switched = recheck_heading(state, np.zeros(48), close, twin, 1000.0, s)
     assert not switched and changes["heading_votes"] == 0
+    # not on the frames between rechecks
+    _, changes, switched = recheck_heading(state.replace(log=({},)), np.zeros(48), refit, twin,
+                                           1000.0, s)
+    assert not switched and changes == {}
 
 
 def test_a_mirrored_start_is_corrected_while_tracking(squat):

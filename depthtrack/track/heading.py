@@ -10,7 +10,8 @@ by :attr:`HeadingSettings.margin`).
 That check sees ten frames once: a start while the limbs are straight (the two twins
 explain them equally well) decides by noise, and a wrong decision used to stand for the
 whole clip. So the question stays open while tracking (:func:`recheck_heading`): every
-:attr:`HeadingSettings.every` frames the tracked pose is compared with its turned twin
+:attr:`HeadingSettings.every` frames the tracked pose is compared with its twin facing the
+other way with every joint left where it is (the sides exchanged, :func:`swapped_twin`),
 climbed on that frame, by the energy without the motion prior (the likelihood plus the pose
 prior, which charges a twin for the bent-backwards joints it needs), and the twin takes
 over after :attr:`HeadingSettings.votes` clear wins in a row.
@@ -48,10 +49,39 @@ def swapped_twin(body, pose):
     backwards where needed). Turning the pose (:func:`turned_pose`) would also turn every
     limb away from where the image shows it; exchanging the sides keeps them.
     """
-    from .run import fit_pose_to_joints
+    pose = np.asarray(pose, dtype=np.float64)
+    joints = np.asarray(body.joint_positions(pose))
+    return fit_joints(body, joints[SIDES_SWAPPED], turned_pose(pose))
 
-    joints = np.asarray(body.joint_positions(np.asarray(pose, dtype=np.float64)))
-    return fit_pose_to_joints(body, joints[SIDES_SWAPPED])
+
+def fit_joints(body, target, x0, iterations: int = 15, regularisation: float = 0.01):
+    """Levenberg-Marquardt from ``x0 (48,)`` to a pose whose joints match ``target (15, 3)``.
+
+    Each iteration's Jacobian is one batched call of the kinematics (finite differences),
+    so a fit takes milliseconds (the recheck runs it while tracking). A pull
+    ``regularisation`` toward the zero pose fixes the twists joint positions leave free.
+    Returns ``(48,)``, within the joint limits.
+    """
+    x = body.clip(np.asarray(x0, dtype=np.float64))
+    n, eps, lam = len(x), 1e-4, 1e-3
+    reg = np.r_[np.zeros(6), np.full(n - 6, regularisation)]
+
+    def residual(poses):
+        d = np.asarray(body.joint_positions(poses)) - target        # (N, 15, 3)
+        return np.concatenate([d.reshape(len(poses), -1), reg * poses], axis=1)
+
+    r = residual(x[None])[0]
+    for _ in range(iterations):
+        rs = residual(x[None] + eps * np.eye(n))                   # (n, 45 + n)
+        J = ((rs - r) / eps).T
+        step = np.linalg.solve(J.T @ J + lam * np.eye(n), -J.T @ r)
+        y = body.clip(x + step)
+        ry = residual(y[None])[0]
+        if ry @ ry < r @ r:
+            x, r, lam = y, ry, lam * 0.3
+        else:
+            lam *= 10.0
+    return x
 
 
 def settle_heading(start, depths, track, turn, settings):
@@ -92,7 +122,7 @@ def settle_heading(start, depths, track, turn, settings):
     return state.replace(init_info=info), poses
 
 
-def recheck_heading(state, pose, score, twin, pixels: float, settings):
+def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings):
     """The heading recheck of one frame (module docstring): keep ``pose`` or its turned twin.
 
     Parameters
@@ -101,11 +131,12 @@ def recheck_heading(state, pose, score, twin, pixels: float, settings):
         Before this frame is logged (``state.frame`` is this frame's index).
     pose : (48,) float
         The frame's tracked pose.
-    score : callable ``(pose (48,)) -> float``
-        The energy without the motion prior on this frame.
-    twin : callable ``(pose (48,)) -> (pose (48,), float)``
-        The other-facing twin of a pose (:func:`swapped_twin`) climbed on this frame, and
-        its ``score``.
+    refit : callable ``(pose (48,)) -> (pose (48,), float)``
+        A pose climbed on this frame by the energy without the motion prior, and that
+        energy. Both hypotheses are climbed alike: the tracked pose was fitted with the
+        motion prior, and a twin fitted without it would win by that alone.
+    swapped_twin_of : callable ``(pose (48,)) -> (48,)``
+        The other-facing twin of a pose (:func:`swapped_twin`).
     pixels : float
         The foreground's pixel count (the margin's scale).
     settings : TrackerSettings
@@ -121,8 +152,8 @@ def recheck_heading(state, pose, score, twin, pixels: float, settings):
     h = settings.heading
     if h.every <= 0 or state.frame % h.every:
         return pose, {}, False
-    e_pose = float(score(pose))
-    y, e_twin = twin(pose)
+    _, e_pose = refit(pose)
+    y, e_twin = refit(swapped_twin_of(pose))
     if not e_twin < e_pose - h.recheck_margin * pixels:
         return pose, {"heading_votes": 0}, False
     votes = state.heading_votes + 1

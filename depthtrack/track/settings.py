@@ -288,18 +288,18 @@ class HeadingSettings:
     frames; the turned one replaces the first when its unexplained share is lower by
     ``margin`` (a fraction). 0 frames = off.
 
-    Then, while tracking, every ``every`` frames (0 = never) the tracked pose is compared
-    with its turned twin climbed on the frame (:func:`.heading.recheck_heading`): the twin
-    gets a vote when its energy without the motion prior (likelihood plus pose prior) is
-    lower by ``recheck_margin`` times the foreground's pixel count, and replaces the
-    track after ``votes`` votes in a row. The twin is climbed ``twin_passes`` passes with
-    the start's steps.
+    Then, while tracking, every ``every`` frames (0 = never) the tracked pose and its twin
+    facing the other way are both climbed on the frame (``twin_passes`` passes with the
+    start's steps; :func:`.heading.recheck_heading`): the twin gets a vote when its energy
+    without the motion prior (likelihood plus pose prior) is lower by ``recheck_margin``
+    times the foreground's pixel count, and replaces the track after ``votes`` votes in a
+    row.
     """
 
     frames: int = 10
     margin: float = 0.1
     every: int = 3
-    recheck_margin: float = 0.02
+    recheck_margin: float = 0.05
     votes: int = 2
     twin_passes: int = 1
 

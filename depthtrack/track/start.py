@@ -32,14 +32,15 @@ def initial_orientations(points, up):
     """Candidate root rotations ``(K, 3, 3)`` for a foreground cloud ``points (M, 3)``.
 
     The body's long axis (head direction) along ``up`` (standing), along +- the cloud's
-    principal axis, and along +- that axis laid parallel to the floor (lying, where the
-    visible surface is foreshortened), each turned about the axis in 45 degree steps.
+    first and second principal axes (a body with its limbs spread, as in a cartwheel, may
+    be wider than long), and along +- the first laid parallel to the floor (lying, where
+    the visible surface is foreshortened), each turned about the axis in 45 degree steps.
     """
     up = np.asarray(up, dtype=np.float64)
     centred = points - points.mean(axis=0)
     _, _, vt = np.linalg.svd(centred, full_matrices=False)
     flat = vt[0] - np.dot(vt[0], up) * up
-    options = [up, vt[0], -vt[0]]
+    options = [up, vt[0], -vt[0], vt[1], -vt[1]]
     if np.linalg.norm(flat) > 0.2:
         flat = flat / np.linalg.norm(flat)
         options += [flat, -flat]

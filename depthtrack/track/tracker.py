@@ -256,12 +256,12 @@ class Tracker:
         """:func:`.heading.recheck_heading` on this frame (coarse renderer, no motion prior)."""
         bare = energy.without_prior()
 
-        def twin(pose):
-            return climb(bare, self.climbers.start, swapped_twin(self.body, pose), self.recorder,
+        def refit(pose):
+            return climb(bare, self.climbers.start, pose, self.recorder,
                          passes=self.settings.heading.twin_passes)
 
         with self.recorder.timed("heading"):
-            return recheck_heading(state, x, bare.one, twin,
+            return recheck_heading(state, x, refit, lambda p: swapped_twin(self.body, p),
                                    float(np.count_nonzero(frame.foreground.mask)), self.settings)
 
     def track_through(self, state, depths):
