@@ -72,7 +72,7 @@ def test_a_mirrored_start_is_corrected_while_tracking(squat):
         switches = tracker.describe()["heading_switches"]
     err = _errors(result.joints, truth)
     assert err[0] > 0.25                          # the start is the mirrored twin
-    assert len(switches) == 1 and switches[0]["frame"] <= 9
+    assert len(switches) == 1 and switches[0]["frame"] <= 2 * TrackerSettings().heading.every
     assert err[switches[0]["frame"]:].max() < 0.1  # corrected from the switch on
     # the same start with the recheck off stays mirrored
     with Tracker(body, squat.camera, settings=TrackerSettings(

@@ -298,7 +298,7 @@ class HeadingSettings:
 
     frames: int = 10
     margin: float = 0.1
-    every: int = 3
+    every: int = 4
     recheck_margin: float = 0.05
     votes: int = 2
     twin_passes: int = 1

@@ -236,6 +236,8 @@ class Tracker:
         if self.method != "ep":
             x, changes, turned = self._recheck_heading(state, energy, frame, x)
             state = state.replace(**changes)
+            if turned:
+                e = energy.one(x)
         cost = unexplained(energy, x)
         recovered = False
         recent = state.recent_costs(s.judge.window)
@@ -354,8 +356,9 @@ class Tracker:
         return {"method": self.method, "likelihood": self.likelihood,
                 "settings": self.settings.to_dict(), "prior": self.prior.to_dict(),
                 "initialisation": self.state.init_info, "counts": self.counts,
-                "recoveries": [dict(r) for r in self.state.recoveries
-                               + ((self.state.lost,) if self.state.lost else ())],
+                # a loss still open at the end: not recovered
+                "recoveries": [dict(r) for r in self.state.recoveries] + (
+                    [{**self.state.lost, "frames_to_recover": None}] if self.state.lost else []),
                 "heading_switches": list(self.state.heading_switches),
                 "energies": [f.get("energy") for f in self.state.log]}
 
