@@ -54,7 +54,8 @@ def test_recheck_switches_after_enough_votes_only():
     x, changes, switched = recheck_heading(state, np.zeros(48), refit, twin, 1000.0, s)
     assert switched and (x == 1.0).all() and changes["heading_switches"][0]["frame"] == h.every
     # within the margin: no vote, and the votes start over
-    close = lambda pose: (pose, 200.0 - (0.5 * h.recheck_margin * 1000.0 if pose[0] else 0))  # noqa: E731
+    half = 0.5 * h.recheck_margin * 1000.0
+    close = lambda pose: (pose, 200.0 - (half if pose[0] else 0.0))  # noqa: E731
     _, changes, switched = recheck_heading(state, np.zeros(48), close, twin, 1000.0, s)
     assert not switched and changes["heading_votes"] == 0
     # not on the frames between rechecks
