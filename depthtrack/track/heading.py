@@ -1,11 +1,20 @@
-"""The front/back check after an automatic start: track the pose and its turned twin, keep the better.
+"""Front or back: the check after an automatic start, and the recheck while tracking.
 
 A depth image barely tells a body's front from its back, and the start's heading prior
 assumes the person faces the camera. Motion does tell them apart: knees and elbows bend one
-way only. Both hypotheses are tracked through the next :attr:`HeadingSettings.frames`
-frames, each from a copy of the start state; the turned one is kept only when its fit
-explains the frames clearly better (mean unexplained share lower by
-:attr:`HeadingSettings.margin`).
+way only. After a start both hypotheses are tracked through the next
+:attr:`HeadingSettings.frames` frames, each from a copy of the start state; the turned one
+is kept only when its fit explains the frames clearly better (mean unexplained share lower
+by :attr:`HeadingSettings.margin`).
+
+That check sees ten frames once: a start while the limbs are straight (the two twins
+explain them equally well) decides by noise, and a wrong decision used to stand for the
+whole clip. So the question stays open while tracking (:func:`recheck_heading`): every
+:attr:`HeadingSettings.every` frames the tracked pose is compared with its twin facing the
+other way with every joint left where it is (the sides exchanged, :func:`swapped_twin`),
+climbed on that frame, by the energy without the motion prior (the likelihood plus the pose
+prior, which charges a twin for the bent-backwards joints it needs), and the twin takes
+over after :attr:`HeadingSettings.votes` clear wins in a row.
 """
 from __future__ import annotations
 
@@ -13,6 +22,7 @@ import numpy as np
 
 from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
 from ..body.skeleton import MODEL_UP
+from ..contract import JOINT_INDEX, JOINT_NAMES
 
 
 def turned_pose(pose):
@@ -22,6 +32,55 @@ def turned_pose(pose):
     R = rotvec_to_matrix(x[3:6])
     axis = R @ MODEL_UP
     x[3:6] = matrix_to_rotvec((rotation_about(axis, np.pi) @ R)[None])[0]
+    return x
+
+
+#: Contract joint order with left and right exchanged.
+SIDES_SWAPPED = [JOINT_INDEX[n.replace("l_", "#").replace("r_", "l_").replace("#", "r_")]
+                 for n in JOINT_NAMES]
+
+
+def swapped_twin(body, pose):
+    """``pose (48,)``'s twin with the joints left where they are and left and right
+    exchanged: the body facing the other way, its limbs where the image put them.
+
+    The twin of a mirrored track: a body seen from behind explains the depth image of one
+    facing the camera with each limb taken by the other side's (hips and shoulders bent
+    backwards where needed). Turning the pose (:func:`turned_pose`) would also turn every
+    limb away from where the image shows it; exchanging the sides keeps them.
+    """
+    pose = np.asarray(pose, dtype=np.float64)
+    joints = np.asarray(body.joint_positions(pose))
+    return fit_joints(body, joints[SIDES_SWAPPED], turned_pose(pose))
+
+
+def fit_joints(body, target, x0, iterations: int = 15, regularisation: float = 0.01):
+    """Levenberg-Marquardt from ``x0 (48,)`` to a pose whose joints match ``target (15, 3)``.
+
+    Each iteration's Jacobian is one batched call of the kinematics (finite differences),
+    so a fit takes milliseconds (the recheck runs it while tracking). A pull
+    ``regularisation`` toward the zero pose fixes the twists joint positions leave free.
+    Returns ``(48,)``, within the joint limits.
+    """
+    x = body.clip(np.asarray(x0, dtype=np.float64))
+    n, eps, lam = len(x), 1e-4, 1e-3
+    reg = np.r_[np.zeros(6), np.full(n - 6, regularisation)]
+
+    def residual(poses):
+        d = np.asarray(body.joint_positions(poses)) - target        # (N, 15, 3)
+        return np.concatenate([d.reshape(len(poses), -1), reg * poses], axis=1)
+
+    r = residual(x[None])[0]
+    for _ in range(iterations):
+        rs = residual(x[None] + eps * np.eye(n))                   # (n, 45 + n)
+        J = ((rs - r) / eps).T
+        step = np.linalg.solve(J.T @ J + lam * np.eye(n), -J.T @ r)
+        y = body.clip(x + step)
+        ry = residual(y[None])[0]
+        if ry @ ry < r @ r:
+            x, r, lam = y, ry, lam * 0.3
+        else:
+            lam *= 10.0
     return x
 
 
@@ -61,3 +120,46 @@ def settle_heading(start, depths, track, turn, settings):
         "frames": len(depths), "unexplained_initial": round(cost_a, 4),
         "unexplained_turned": None if cost_b is None else round(cost_b, 4), "kept": choice}}
     return state.replace(init_info=info), poses
+
+
+def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings):
+    """The heading recheck of one frame (module docstring): keep ``pose`` or its turned twin.
+
+    Parameters
+    ----------
+    state : TrackingState
+        Before this frame is logged (``state.frame`` is this frame's index).
+    pose : (48,) float
+        The frame's tracked pose.
+    refit : callable ``(pose (48,)) -> (pose (48,), float)``
+        A pose climbed on this frame by the energy without the motion prior, and that
+        energy. Both hypotheses are climbed alike: the tracked pose was fitted with the
+        motion prior, and a twin fitted without it would win by that alone.
+    swapped_twin_of : callable ``(pose (48,)) -> (48,)``
+        The other-facing twin of a pose (:func:`swapped_twin`).
+    pixels : float
+        The foreground's pixel count (the margin's scale).
+    settings : TrackerSettings
+
+    Returns
+    -------
+    pose : (48,) float
+        The twin when it took over, else ``pose``.
+    changes : dict
+        For the state (``heading_votes``, ``heading_switches``).
+    switched : bool
+    """
+    h = settings.heading
+    if h.every <= 0 or state.frame % h.every:
+        return pose, {}, False
+    _, e_pose = refit(pose)
+    y, e_twin = refit(swapped_twin_of(pose))
+    if not e_twin < e_pose - h.recheck_margin * pixels:
+        return pose, {"heading_votes": 0}, False
+    votes = state.heading_votes + 1
+    if votes < h.votes:
+        return pose, {"heading_votes": votes}, False
+    switch = {"frame": state.frame, "energy_kept": round(e_pose, 1),
+              "energy_turned": round(float(e_twin), 1)}
+    return np.asarray(y, dtype=np.float64), {
+        "heading_votes": 0, "heading_switches": state.heading_switches + (switch,)}, True

@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ..body.rotations import rotvec_to_matrix
-from ..body.skeleton import MODEL_FORWARD
+from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..errors import InputError
 from ..likelihood import fixed_and_empty_costs
 from .start import global_search
@@ -38,6 +38,35 @@ def is_lost(cost: float, recent, settings) -> bool:
     return cost > s.lost_ratio * typical and cost > typical + s.lost_margin
 
 
+def loss_reason(cost: float, recent, settings):
+    """Why the track counts as lost on this frame, or None: ``"unexplained"`` when the
+    explained share collapsed (:func:`is_lost`)."""
+    return "unexplained" if is_lost(cost, recent, settings) else None
+
+
+def judge_frame(state, cost: float, reason, settings):
+    """The loss bookkeeping of one frame: ``(changes for the state, log fields)``.
+
+    ``reason``: :func:`loss_reason` of the frame's final pose (after any recovery). A loss
+    opens on its first lost frame and closes on the first frame judged not lost (or, after
+    :attr:`JudgeSettings.max_lost_frames`, unrecovered); each closed loss is appended to
+    ``state.recoveries`` as ``{"frame", "reason", "frames_to_recover"}``.
+    """
+    frame = state.frame
+    lost = state.lost
+    if lost is None and reason is None:
+        return {}, {}
+    if lost is None:
+        lost = {"frame": frame, "reason": reason}
+    if reason is None:
+        done = {**lost, "frames_to_recover": frame - lost["frame"]}
+        return {"lost": None, "recoveries": state.recoveries + (done,)}, {}
+    if frame - lost["frame"] + 1 >= settings.judge.max_lost_frames:
+        done = {**lost, "frames_to_recover": None}
+        return {"lost": None, "recoveries": state.recoveries + (done,)}, {"reset": True}
+    return {"lost": lost}, {"lost": True}
+
+
 def recover(tracker, energy, frame, previous, x, cost):
     """Global search on ``frame``; taken when it explains more than the tracked ``x``.
 
@@ -51,10 +80,13 @@ def recover(tracker, energy, frame, previous, x, cost):
         Its unexplained share.
     """
     t = time.perf_counter()
-    heading = rotvec_to_matrix(previous[3:6]) @ MODEL_FORWARD
+    R = rotvec_to_matrix(previous[3:6])
     energy = energy.without_prior()
     try:
-        y, _, _ = global_search(tracker, energy, frame, heading=heading)
+        # the search prefers the last heading and the last body axis (a cartwheel's
+        # upside-down body is no less likely there than an upright one)
+        y, _, _ = global_search(tracker, energy, frame, heading=R @ MODEL_FORWARD,
+                                body_axis=R @ MODEL_UP)
     except InputError:
         return False, x, cost
     y_cost = unexplained(energy, y)

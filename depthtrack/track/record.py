@@ -10,7 +10,8 @@ from contextlib import contextmanager
 
 #: Timed stages (seconds). ``association`` and ``recover`` include the render, search,
 #: detect and evidence time spent inside them; ``search`` excludes its render time.
-STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover")
+STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover",
+          "heading")
 #: Counters.
 COUNTS = ("candidates", "render_calls", "detections", "correspondences", "accepted",
           "recoveries_tried", "recoveries", "frames_without_person", "reinitialisations")
@@ -66,6 +67,7 @@ class Recorder:
         ``evidence`` evidence propagation (unscented transform); ``association`` the whole
         association loop (includes its detect, evidence, render and search time);
         ``recover`` global searches after a lost track (includes their render time);
+        ``heading`` the front/back recheck (includes its render and search time);
         ``other`` = per-frame total minus segment, render, search, detect, evidence (frame
         loading, bookkeeping).
         """

@@ -214,15 +214,19 @@ class JudgeSettings:
 
     The track counts as lost when the share of the observation the fitted pose leaves
     unexplained exceeds both ``lost_ratio`` times and ``lost_margin`` plus the median of the
-    last ``window`` frames.
+    last ``window`` frames that were not themselves judged lost. While lost, the global
+    search runs on every frame; a loss that lasts ``max_lost_frames`` frames is closed
+    unrecovered (the scene has changed: the recent shares start afresh). Every loss is
+    reported (:attr:`TrackingState.recoveries`, ``summary.json``).
     """
 
     lost_ratio: float = 1.6
     lost_margin: float = 0.15
     window: int = 8
+    max_lost_frames: int = 10
 
     def __post_init__(self):
-        _positive(self, "lost_ratio", "window")
+        _positive(self, "lost_ratio", "window", "max_lost_frames")
         _positive(self, "lost_margin", allow_zero=True)
 
 
@@ -284,13 +288,25 @@ class HeadingSettings:
     The pose and its twin turned to face the other way are both tracked through ``frames``
     frames; the turned one replaces the first when its unexplained share is lower by
     ``margin`` (a fraction). 0 frames = off.
+
+    Then, while tracking, every ``every`` frames (0 = never) the tracked pose and its twin
+    facing the other way are both climbed on the frame (``twin_passes`` passes with the
+    start's steps; :func:`.heading.recheck_heading`): the twin gets a vote when its energy
+    without the motion prior (likelihood plus pose prior) is lower by ``recheck_margin``
+    times the foreground's pixel count, and replaces the track after ``votes`` votes in a
+    row.
     """
 
     frames: int = 10
     margin: float = 0.1
+    every: int = 4
+    recheck_margin: float = 0.05
+    votes: int = 2
+    twin_passes: int = 1
 
     def __post_init__(self):
-        _positive(self, "frames", "margin", allow_zero=True)
+        _positive(self, "frames", "margin", "every", "recheck_margin", allow_zero=True)
+        _positive(self, "votes", "twin_passes")
 
 
 @dataclass(frozen=True)

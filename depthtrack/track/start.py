@@ -32,14 +32,15 @@ def initial_orientations(points, up):
     """Candidate root rotations ``(K, 3, 3)`` for a foreground cloud ``points (M, 3)``.
 
     The body's long axis (head direction) along ``up`` (standing), along +- the cloud's
-    principal axis, and along +- that axis laid parallel to the floor (lying, where the
-    visible surface is foreshortened), each turned about the axis in 45 degree steps.
+    first and second principal axes (a body with its limbs spread, as in a cartwheel, may
+    be wider than long), and along +- the first laid parallel to the floor (lying, where
+    the visible surface is foreshortened), each turned about the axis in 45 degree steps.
     """
     up = np.asarray(up, dtype=np.float64)
     centred = points - points.mean(axis=0)
     _, _, vt = np.linalg.svd(centred, full_matrices=False)
     flat = vt[0] - np.dot(vt[0], up) * up
-    options = [up, vt[0], -vt[0]]
+    options = [up, vt[0], -vt[0], vt[1], -vt[1]]
     if np.linalg.norm(flat) > 0.2:
         flat = flat / np.linalg.norm(flat)
         options += [flat, -flat]
@@ -122,7 +123,7 @@ def candidate_poses(points, up, centre, render_body, settings):
     return np.concatenate(shifted), len(rotations)
 
 
-def global_search(tracker, energy, frame, heading=None):
+def global_search(tracker, energy, frame, heading=None, body_axis=None):
     """Find the body in ``frame`` without a previous pose (module docstring).
 
     Parameters
@@ -135,6 +136,8 @@ def global_search(tracker, energy, frame, heading=None):
         Uploaded into the renderers.
     heading : (3,) float or None
         Last tracked forward direction (recovery), else the body is expected to face the camera.
+    body_axis : (3,) float or None
+        Last tracked head direction (recovery): the prior prefers it to 'up'.
 
     Returns
     -------
@@ -155,7 +158,8 @@ def global_search(tracker, energy, frame, heading=None):
     poses, n_rot = candidate_poses(points, up, centre, tracker.render_body, tracker.settings)
     kappa = g.facing_prior * float(np.count_nonzero(fg.mask))
     energies = energy(poses)
-    facing = facing_penalty(poses, kappa, up, heading)
+    prior_up = up if body_axis is None else np.asarray(body_axis, dtype=np.float64)
+    facing = facing_penalty(poses, kappa, prior_up, heading)
     order = np.argsort(energies + facing)
     climber = tracker.climbers.start
     root_blocks = climber.blocks[:g.root_blocks]
@@ -172,7 +176,7 @@ def global_search(tracker, energy, frame, heading=None):
         if tracker.method != "hc" and tracker.detector is not None:
             x, e, _ = associate_stage(tracker, energy, frame, x, e)
             x, e = climb(energy, climber, x, rec, start_energy=e, level_offset=g.associate_level)
-        score = e + float(facing_penalty(x[None], kappa, up, heading)[0])
+        score = e + float(facing_penalty(x[None], kappa, prior_up, heading)[0])
         finalists.append({"candidate": int(i), "energy": round(float(e), 1),
                           "score": round(score, 1)})
         if best is None or score < best[0]:

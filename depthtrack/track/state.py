@@ -35,6 +35,15 @@ class TrackingState:
         ``{"absent": True}`` when the track was dropped.
     init_info : dict
         How the last start went (``mode``, candidates, finalists, ``heading_check``).
+    lost : dict or None
+        While the track is judged lost: ``frame`` and ``reason`` of the loss (:mod:`.judge`).
+    recoveries : tuple of dict
+        Every loss: ``frame``, ``reason``, ``frames_to_recover`` (0 = back on the frame it
+        was lost; None = closed unrecovered after :attr:`JudgeSettings.max_lost_frames`).
+    heading_votes : int
+        Heading rechecks in a row that preferred the turned twin (:mod:`.heading`).
+    heading_switches : tuple of dict
+        Each time a recheck replaced the track by its turned twin: ``frame``, energies.
     """
 
     pose: np.ndarray | None = None
@@ -45,6 +54,16 @@ class TrackingState:
     frames_without_person: int = 0
     log: tuple = ()
     init_info: dict = field(default_factory=dict)
+    lost: dict | None = None
+    recoveries: tuple = ()
+    heading_votes: int = 0
+    heading_switches: tuple = ()
+
+    @property
+    def frame(self) -> int:
+        """Index of the next frame among those tracked (log entries): the sequence's frame
+        index when the person is there from the first frame."""
+        return len(self.log)
 
     def replace(self, **changes) -> "TrackingState":
         return dataclasses.replace(self, **changes)
@@ -54,8 +73,18 @@ class TrackingState:
         return dataclasses.replace(self, log=self.log + (entry,), **changes)
 
     def recent_costs(self, window: int) -> list:
-        """Unexplained shares of the last ``window`` log entries that have one."""
-        return [f["cost"] for f in self.log[-window:] if "cost" in f]
+        """Unexplained shares of the last ``window`` log entries that have one, not counting
+        frames judged lost (a lost track must not become the norm it is judged by) and
+        nothing before a loss closed unrecovered (``"reset"`` in its entry)."""
+        costs = []
+        for f in reversed(self.log):
+            if len(costs) >= window:
+                break
+            if "cost" in f and not f.get("lost"):
+                costs.append(f["cost"])
+            if f.get("reset"):
+                break
+        return costs[::-1]
 
 
 @dataclass

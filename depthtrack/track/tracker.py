@@ -42,8 +42,8 @@ from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
-from .heading import turned_pose
-from .judge import is_lost, recover, unexplained
+from .heading import recheck_heading, swapped_twin, turned_pose
+from .judge import judge_frame, loss_reason, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage
 from .record import Recorder
@@ -232,14 +232,39 @@ class Tracker:
             x, e, accepted = associate_stage(self, energy, frame, x, e)
         if self.method != "ep":
             x, e = polish(energy, self.renderers.fine, self.climbers, s, self.recorder, x)
+        turned = False
+        if self.method != "ep":
+            x, changes, turned = self._recheck_heading(state, energy, frame, x)
+            state = state.replace(**changes)
+            if turned:
+                e = energy.one(x)
         cost = unexplained(energy, x)
         recovered = False
-        if self.method != "ep" and is_lost(cost, state.recent_costs(s.judge.window), s):
+        recent = state.recent_costs(s.judge.window)
+        reason = loss_reason(cost, recent, s) if self.method != "ep" else None
+        if reason is not None:
             recovered, x, cost = recover(self, energy, frame, x_prev, x, cost)
-        velocity = np.zeros(self.body.dof) if recovered else pose_velocity(x_prev, x)
+            if recovered:
+                reason = loss_reason(cost, recent, s)
+        changes, flags = judge_frame(state, cost, reason, s)
+        velocity = (np.zeros(self.body.dof) if recovered or turned
+                    else pose_velocity(x_prev, x))
         state = state.logged({"energy": e, "cost": cost, "accepted": accepted,
-                              "recovered": recovered}, pose=x, velocity=velocity, absent=absent)
+                              "recovered": recovered, "turned": turned, **flags},
+                             pose=x, velocity=velocity, absent=absent, **changes)
         return state, x.copy()
+
+    def _recheck_heading(self, state, energy, frame, x):
+        """:func:`.heading.recheck_heading` on this frame (coarse renderer, no motion prior)."""
+        bare = energy.without_prior()
+
+        def refit(pose):
+            return climb(bare, self.climbers.start, pose, self.recorder,
+                         passes=self.settings.heading.twin_passes)
+
+        with self.recorder.timed("heading"):
+            return recheck_heading(state, x, refit, lambda p: swapped_twin(self.body, p),
+                                   float(np.count_nonzero(frame.foreground.mask)), self.settings)
 
     def track_through(self, state, depths):
         """``advance`` through ``depths``; ``(state, poses (K, 48), mean cost)``, or None when
@@ -331,6 +356,10 @@ class Tracker:
         return {"method": self.method, "likelihood": self.likelihood,
                 "settings": self.settings.to_dict(), "prior": self.prior.to_dict(),
                 "initialisation": self.state.init_info, "counts": self.counts,
+                # a loss still open at the end: not recovered
+                "recoveries": [dict(r) for r in self.state.recoveries] + (
+                    [{**self.state.lost, "frames_to_recover": None}] if self.state.lost else []),
+                "heading_switches": list(self.state.heading_switches),
                 "energies": [f.get("energy") for f in self.state.log]}
 
 

@@ -1,0 +1,124 @@
+"""Holding on: a mirrored start is corrected while tracking, a lost track is recovered and
+reported (issue 10), on short synthetic ToF sequences."""
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.body.skeleton import POSE_INDEX
+from depthtrack.io import open_sequence
+from depthtrack.synth.generate import synthesize_procedural
+from depthtrack.track import TrackerSettings
+from depthtrack.track.heading import SIDES_SWAPPED, recheck_heading, swapped_twin, turned_pose
+from depthtrack.track.judge import judge_frame
+from depthtrack.track.state import TrackingState
+from depthtrack.track.tracker import Tracker, fit_pose_to_joints
+
+
+def _errors(joints, truth):
+    return np.linalg.norm(np.asarray(joints) - truth, axis=-1).mean(axis=-1)
+
+
+@pytest.fixture(scope="module")
+def squat(tmp_path_factory):
+    """15 frames of a half squat, arms forward (SR4000, ToF noise)."""
+    d = tmp_path_factory.mktemp("squat") / "seq"
+    synthesize_procedural("squat", d, start=0.6, seconds=0.6, seed=3)
+    return open_sequence(d)
+
+
+def test_swapped_twin_keeps_the_joints_and_faces_the_other_way():
+    body = BodyModel.default(height=1.75)
+    x = np.zeros(48)
+    x[2] = 3.0
+    x[POSE_INDEX["l_hip_rx"]] = -0.8                 # a thigh forward: not symmetric
+    y = swapped_twin(body, x)
+    a, b = np.asarray(body.joint_positions(x)), np.asarray(body.joint_positions(y))
+    assert np.abs(b - a[SIDES_SWAPPED]).max() < 0.03
+    from depthtrack.body.rotations import rotvec_to_matrix
+    from depthtrack.body.skeleton import MODEL_FORWARD
+    fa = rotvec_to_matrix(x[3:6]) @ MODEL_FORWARD
+    fb = rotvec_to_matrix(y[3:6]) @ MODEL_FORWARD
+    assert fa @ fb < -0.9
+
+
+def test_recheck_switches_after_enough_votes_only():
+    s = TrackerSettings()
+    h = s.heading
+    state = TrackingState(log=({},) * h.every)          # a frame the recheck runs on
+    twin = lambda pose: pose + 1.0                      # noqa: E731
+    # the pose (all zeros) refits to energy 200, its twin (all ones) to 100
+    refit = lambda pose: (pose, 100.0 if pose[0] else 200.0)  # noqa: E731
+    x, changes, switched = recheck_heading(state, np.zeros(48), refit, twin, 1000.0, s)
+    assert not switched and changes["heading_votes"] == 1 and not x.any()
+    state = state.replace(heading_votes=h.votes - 1)
+    x, changes, switched = recheck_heading(state, np.zeros(48), refit, twin, 1000.0, s)
+    assert switched and (x == 1.0).all() and changes["heading_switches"][0]["frame"] == h.every
+    # within the margin: no vote, and the votes start over
+    half = 0.5 * h.recheck_margin * 1000.0
+    close = lambda pose: (pose, 200.0 - (half if pose[0] else 0.0))  # noqa: E731
+    _, changes, switched = recheck_heading(state, np.zeros(48), close, twin, 1000.0, s)
+    assert not switched and changes["heading_votes"] == 0
+    # not on the frames between rechecks
+    _, changes, switched = recheck_heading(state.replace(log=({},)), np.zeros(48), refit, twin,
+                                           1000.0, s)
+    assert not switched and changes == {}
+
+
+def test_a_mirrored_start_is_corrected_while_tracking(squat):
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
+    with Tracker(body, squat.camera, settings=TrackerSettings()) as tracker:
+        result = tracker.track_sequence(squat, init_pose=x0)
+        switches = tracker.describe()["heading_switches"]
+    err = _errors(result.joints, truth)
+    assert err[0] > 0.25                          # the start is the mirrored twin
+    assert len(switches) == 1 and switches[0]["frame"] <= 2 * TrackerSettings().heading.every
+    assert err[switches[0]["frame"]:].max() < 0.1  # corrected from the switch on
+    # the same start with the recheck off stays mirrored
+    with Tracker(body, squat.camera, settings=TrackerSettings(
+            heading=TrackerSettings().heading.__class__(every=0))) as tracker:
+        stuck = _errors(tracker.track_sequence(squat, init_pose=x0).joints, truth)
+    assert stuck[-5:].min() > 0.25
+
+
+def test_loss_bookkeeping_opens_closes_and_gives_up():
+    s = TrackerSettings()
+    state = TrackingState(log=({"cost": 0.2},) * 4)
+    changes, flags = judge_frame(state, 0.9, "unexplained", s)
+    assert changes["lost"] == {"frame": 4, "reason": "unexplained"} and flags == {"lost": True}
+    state = state.replace(log=state.log + ({"cost": 0.9, **flags},) * 2, **changes)
+    changes, flags = judge_frame(state, 0.2, None, s)
+    assert changes["recoveries"] == ({"frame": 4, "reason": "unexplained",
+                                      "frames_to_recover": 2},) and changes["lost"] is None
+    assert state.recent_costs(8) == [0.2] * 4     # lost frames are not the norm
+    long = state.replace(log=state.log + ({"lost": True},) * s.judge.max_lost_frames)
+    changes, flags = judge_frame(long, 0.9, "unexplained", s)
+    assert changes["recoveries"][-1]["frames_to_recover"] is None and flags["reset"]
+
+
+def test_a_lost_track_is_recovered_within_five_frames_and_reported(squat):
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    lose = 6
+    with Tracker(body, squat.camera, settings=TrackerSettings()) as tracker:
+        tracker.init(squat.depth(0), pose=fit_pose_to_joints(body, truth[0]))
+        joints = [body.joint_positions(tracker.pose)]
+        for i in range(1, len(squat)):
+            if i == lose:                           # the track jumps far off
+                far = tracker.pose.copy()
+                far[0] += 0.7
+                far[3:6] = turned_pose(far)[3:6]
+                tracker.state = tracker.state.replace(pose=far)
+            joints.append(body.joint_positions(tracker.step(squat.depth(i))))
+        info = tracker.describe()
+    err = _errors(np.array(joints), truth)
+    assert err[:lose].max() < 0.1
+    rec = info["recoveries"]
+    assert rec[0]["frame"] == lose and rec[0]["reason"] == "unexplained"
+    # every loss reported closed, the last within 5 frames of the jump (a global search
+    # may land a few centimetres off and be judged lost once more)
+    assert all(r["frames_to_recover"] is not None for r in rec)
+    back = rec[-1]["frame"] + rec[-1]["frames_to_recover"]
+    assert back - lose <= 5
+    assert err[lose] > 0.3 and err[lose + 5:].max() < 0.1
