@@ -5,7 +5,9 @@ images" (CVPR 2011): randomized decision trees over depth-invariant depth-differ
 features (:mod:`.features`) label every person pixel with one of :data:`BODY_PARTS`
 (:mod:`.recognizer_parts`); mean shift over the back-projected pixels, weighted by the
 part's probability times the pixel's surface area, finds each part's modes, and each mode
-pushed a learned depth behind the surface proposes a joint.
+pushed a learned depth behind the surface proposes a joint. The shipped trees also split
+on each pixel's offset from the centre of the person's points (``meta["extras"] ==
+"centroid"``, :func:`~depthtrack.detect.features.centroid_features`).
 
 An optional first stage (not in the shipped model, see the README): regression trees
 estimate the body's axes (where the torso faces, where its head is) from every pixel,
