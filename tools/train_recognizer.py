@@ -393,6 +393,7 @@ def evaluate(forest, source, n_frames, quiet, label):
     confusion = np.zeros((NUM_PARTS, NUM_PARTS), np.int64)
     facing = np.zeros((2, 2))        # rows: upright, any orientation; forward estimate within 90 deg, frames
     side_axis = np.zeros((2, 2))     # rows: upright, any orientation; side stage's left axis within 90 deg, frames
+    tally = np.zeros(3)              # upright frames: tally sign right, sided accuracy within 0.3-0.7, frames
     side = np.zeros((2, 2))          # rows: upright, any orientation; sided pixels on the true side, all sided
     sides = np.array([n[:2] for n in BODY_PARTS])
     sided = np.isin(sides, ["l_", "r_"])
@@ -423,6 +424,18 @@ def evaluate(forest, source, n_frames, quiet, label):
             t, g = frame.labels[sel], labels[sel]
             both = sided[t] & sided[g]
             side[0 if upright else 1] += [np.sum(sides[t[both]] == sides[g[both]]), both.sum()]
+            if upright and both.any():
+                # would one left/right decision per frame help? the forest's own tally of its
+                # sides against image x, and how mixed the frame's sided labels are
+                r_, c_ = np.nonzero(sel)
+                dx = c_ - c_.mean()
+                p_side = probs[r_, c_][:, sided]
+                lr = np.where(sides[sided] == "l_", 1.0, -1.0)
+                truth_sign = np.sum((np.where(sides[t] == "l_", 1.0, -1.0) * dx)[sided[t]])
+                tally[0] += np.sign((p_side @ lr) @ dx) == np.sign(truth_sign)
+                acc = np.mean(sides[t[both]] == sides[g[both]])
+                tally[1] += 0.3 <= acc <= 0.7
+                tally[2] += 1
             prop = joint_proposals(frame.depth, probs, camera, k=3, forest=forest)
             timing.setdefault(cam_name, []).append([t_labels - t_start, time.perf_counter() - t_labels])
             dist = np.linalg.norm(prop.positions - frame.joints[:, None], axis=2)
@@ -449,6 +462,8 @@ def evaluate(forest, source, n_frames, quiet, label):
             "facing_correct_rotated": float(facing[1, 0] / facing[1, 1]) if facing[1, 1] else None,
             "side_axis_correct_upright": float(side_axis[0, 0] / side_axis[0, 1]) if side_axis[0, 1] else None,
             "side_axis_correct_rotated": float(side_axis[1, 0] / side_axis[1, 1]) if side_axis[1, 1] else None,
+            "frame_side_tally_correct_upright": float(tally[0] / max(tally[2], 1)),
+            "frames_side_mixed_upright": float(tally[1] / max(tally[2], 1)),
             "left_right_correct_upright": float(side[0, 0] / max(side[0, 1], 1)),
             "left_right_correct_rotated": float(side[1, 0] / max(side[1, 1], 1)),
             "joint_within_10cm_any_of_3": float(hit_any.sum() / (frames.sum() * len(JOINT_NAMES))),
@@ -473,7 +488,8 @@ def print_report(results):
     if results[names[0]]["side_axis_correct_upright"] is not None:
         keys = (*keys, "side_axis_correct_upright", "side_axis_correct_rotated")
     for key in ("pixel_accuracy", "side_free_pixel_accuracy", *keys, "left_right_correct_upright",
-                "left_right_correct_rotated", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
+                "left_right_correct_rotated", "frame_side_tally_correct_upright", "frames_side_mixed_upright",
+                "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
                 "upright_within_10cm_any_of_3", "rotated_within_10cm_any_of_3"):
         print(f"{key:32}" + "".join(f" {results[n][key]:10.3f} ({n})" for n in names))
     print("per joint, a proposal (of 3) within 10 cm:")
