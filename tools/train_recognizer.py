@@ -24,7 +24,7 @@ renders of the train motions (another seed), on the dev motions, and on the test
 Usage::
 
     OMP_NUM_THREADS=1 nice -n 10 .venv/bin/python tools/train_recognizer.py --seed 0 --frames 3000 \
-        --extras centroid [--cache /tmp/set.npz] [--trees 3] [--eval-frames 120] [--sets held-out,dev]
+        --extras centroid --trees 4 [--cache /tmp/set.npz] [--eval-frames 120] [--sets held-out,dev]
         [--data ../shared/data] [--out depthtrack/data/recognizer.npz]      # the shipped model
     nice -n 10 .venv/bin/python tools/train_recognizer.py --eval-only   # evaluate the shipped model
 """
@@ -503,7 +503,7 @@ def print_report(results):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
-                                 epilog="example: nice -n 10 .venv/bin/python tools/train_recognizer.py --seed 0 --frames 3000 --extras centroid")
+                                 epilog="example: nice -n 10 .venv/bin/python tools/train_recognizer.py --seed 0 --frames 3000 --extras centroid --trees 4")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--frames", type=int, default=1800, help="training frames (default 1800)")
     ap.add_argument("--pixels", type=int, default=400, help="sampled pixels per training frame")
