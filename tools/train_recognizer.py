@@ -23,8 +23,9 @@ renders of the train motions (another seed), on the dev motions, and on the test
 
 Usage::
 
-    nice -n 10 .venv/bin/python tools/train_recognizer.py [--seed 0] [--frames 1800]
-        [--trees 3] [--eval-frames 120] [--data ../shared/data] [--out depthtrack/data/recognizer.npz]
+    OMP_NUM_THREADS=1 nice -n 10 .venv/bin/python tools/train_recognizer.py --seed 0 --frames 3000 \
+        --extras centroid --trees 4 [--cache /tmp/set.npz] [--eval-frames 120] [--sets held-out,dev]
+        [--data ../shared/data] [--out depthtrack/data/recognizer.npz]      # the shipped model
     nice -n 10 .venv/bin/python tools/train_recognizer.py --eval-only   # evaluate the shipped model
 """
 from __future__ import annotations
@@ -45,7 +46,7 @@ from depthtrack.body import BodyModel  # noqa: E402
 from depthtrack.body.rotations import quat_to_matrix, rotation_about  # noqa: E402
 from depthtrack.camera import Camera  # noqa: E402
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
-from depthtrack.detect.features import depth_features, probe_image, sample_offsets  # noqa: E402
+from depthtrack.detect.features import centroid_features, depth_features, probe_image, sample_offsets  # noqa: E402
 from depthtrack.detect.recognizer import PartForest, Trees, default_path, joint_proposals, recognize  # noqa: E402
 from depthtrack.detect.recognizer_parts import BODY_PARTS, NUM_PARTS, mirror_parts  # noqa: E402
 from depthtrack.progress import Progress  # noqa: E402
@@ -201,6 +202,29 @@ def make_training_set(source, n_frames, offsets, per_frame, quiet):
                 axes=np.array(axes), centres=np.array(centres))
 
 
+def cached_training_set(args, source, offsets):
+    """:func:`make_training_set`, or the same set read back from ``--cache`` when it was made
+    with the same seed, frames, pixels, offsets and upright share (tree settings are then
+    cheap to vary; the frames themselves are what takes minutes)."""
+    key = json.dumps({"seed": args.seed, "frames": args.frames, "pixels": args.pixels,
+                      "candidates": args.candidates, "radius": args.radius, "upright": args.upright,
+                      "train": [n for n, _ in source.motions]})
+    if args.cache is not None and args.cache.exists():
+        with np.load(args.cache, allow_pickle=False) as z:
+            if str(z["key"]) == key:
+                print(f"training set read from {args.cache}", file=sys.stderr)
+                return {k: z[k] for k in ("X", "y", "P", "frame", "axes", "centres")}
+        print(f"note: {args.cache} was made with other settings; making the set again", file=sys.stderr)
+    data = make_training_set(source, args.frames, offsets, args.pixels, args.quiet)
+    if args.cache is not None:
+        from depthtrack.io.atomic import atomic_path
+
+        with atomic_path(args.cache) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, key=key, **data)
+    return data
+
+
 def export_trees(trees, feature_sets, n_offsets, classes=None) -> Trees:
     """Flatten scikit-learn trees into :class:`Trees`: a tree's feature i is its offset pair
     ``feature_set[i]``, or extra input ``i - len(feature_set)`` (numbered ``n_offsets + e``)."""
@@ -277,18 +301,67 @@ def noisy_extras(data, errors, rng) -> np.ndarray:
     return out
 
 
+def fit_side(X, data, args, rng):
+    """The side stage: two regression trees, one per half of the frames (odd, even), for the
+    camera x, y of the subject's left axis at each pixel. Each training frame's estimate
+    (mean over its pixels) comes from the tree that did not see it, so the part trees learn
+    how far to trust it; at run time both trees are averaged.
+
+    Returns
+    -------
+    Trees, (F, 2) float32 out-of-fold estimate per training frame
+    """
+    from sklearn.tree import DecisionTreeRegressor
+
+    frame = data["frame"]
+    F = len(data["axes"])
+    target = data["axes"][frame][:, :2, 2].astype(np.float32)
+    est, trees, fsets = np.zeros((F, 2)), [], []
+    count = np.maximum(np.bincount(frame, minlength=F), 1)
+    for fold in (0, 1):
+        fset = np.sort(rng.choice(args.candidates, max(1, int(0.7 * args.candidates)), replace=False))
+        rows = frame % 2 == fold
+        tree = DecisionTreeRegressor(max_depth=args.side_depth, min_samples_leaf=50, max_features=args.max_features,
+                                     random_state=int(rng.integers(1 << 31)))
+        tree.fit(X[rows][:, fset].astype(np.float32), target[rows])
+        pred = tree.predict(X[~rows][:, fset].astype(np.float32))
+        for c in (0, 1):
+            est[:, c] += np.bincount(frame[~rows], weights=pred[:, c], minlength=F)
+        trees.append(tree)
+        fsets.append(fset)
+        print(f"side tree {fold + 1}/2: {tree.tree_.node_count} nodes", file=sys.stderr)
+    est /= count[:, None]
+    truth = data["axes"][:, :2, 2]
+    flat = np.abs(truth[:, 0]) > 0.7
+    print(f"side stage, out of fold: left axis on the right side of the image in "
+          f"{np.mean((est * truth).sum(1) > 0):.1%} of training frames ({np.mean((est * truth).sum(1)[flat] > 0):.1%} "
+          f"where it lies along the image's x)", file=sys.stderr)
+    return export_trees(trees, fsets, args.candidates), est.astype(np.float32)
+
+
+def frame_extras(forest, image, rows, cols, points, fx, fy):
+    """(N, E) the per-pixel extra inputs the part trees of ``forest`` split on (none: E = 0)."""
+    from depthtrack.detect.features import body_frame_features, side_features
+
+    if forest.orient is not None:
+        return body_frame_features(points, points.mean(axis=0), *forest.orientation(image, rows, cols, fx, fy))
+    if forest.extras == "none":
+        return np.zeros((len(rows), 0), np.float32)
+    ext = centroid_features(points, points.mean(axis=0))
+    if forest.side is not None:
+        ext = np.hstack([ext, side_features(ext, forest.side_axis(image, rows, cols, fx, fy))])
+    return ext
+
+
 def check_export(forest, trees, fsets, offsets, source):
     """The numpy traversal must reproduce scikit-learn's probabilities on a fresh frame."""
-    from depthtrack.detect.features import body_frame_features
-
     _, camera, frame, _ = source.frame()
-    rows, cols = np.nonzero(frame.mask)
+    rows, cols = np.nonzero(frame.mask & (frame.depth > 0))
     image = probe_image(frame.depth, frame.mask)
     X = depth_features(image, np.stack([rows, cols], 1), offsets, camera.fx, camera.fy)
-    pts, centre = person_points(frame.depth, frame.mask, camera, rows, cols)
+    pts, _ = person_points(frame.depth, frame.mask, camera, rows, cols)
     axes = forest.orientation(image, rows, cols, camera.fx, camera.fy)
-    extras = (np.zeros((len(rows), 0), np.float32) if forest.orient is None
-              else body_frame_features(pts, pts.mean(axis=0), *axes))
+    extras = frame_extras(forest, image, rows, cols, pts, camera.fx, camera.fy)
     ref = np.zeros((len(rows), NUM_PARTS))
     for tree, fset in zip(trees, fsets):
         ref[:, tree.classes_] += tree.predict_proba(np.hstack([X[:, fset], extras])) / len(trees)
@@ -319,6 +392,8 @@ def evaluate(forest, source, n_frames, quiet, label):
     """Per-part precision/recall over person pixels, pixel accuracy, joints with a proposal within 10 cm."""
     confusion = np.zeros((NUM_PARTS, NUM_PARTS), np.int64)
     facing = np.zeros((2, 2))        # rows: upright, any orientation; forward estimate within 90 deg, frames
+    side_axis = np.zeros((2, 2))     # rows: upright, any orientation; side stage's left axis within 90 deg, frames
+    tally = np.zeros(3)              # upright frames: tally sign right, sided accuracy within 0.3-0.7, frames
     side = np.zeros((2, 2))          # rows: upright, any orientation; sided pixels on the true side, all sided
     sides = np.array([n[:2] for n in BODY_PARTS])
     sided = np.isin(sides, ["l_", "r_"])
@@ -338,6 +413,9 @@ def evaluate(forest, source, n_frames, quiet, label):
             truth = body_axes(source.body, frame.pose)
             if forest.orient is not None:
                 facing[0 if upright else 1] += [axes[0] @ truth[:, 0] > 0, 1]
+            if forest.side is not None:
+                est = forest.side_axis(probe_image(frame.depth, frame.mask), rows, cols, camera.fx, camera.fy)
+                side_axis[0 if upright else 1] += [est @ truth[:2, 2] > 0, 1]
             t_start = time.perf_counter()
             labels, probs = recognize(frame.depth, frame.mask, camera, forest=forest, orientation=axes)
             t_labels = time.perf_counter()
@@ -346,6 +424,18 @@ def evaluate(forest, source, n_frames, quiet, label):
             t, g = frame.labels[sel], labels[sel]
             both = sided[t] & sided[g]
             side[0 if upright else 1] += [np.sum(sides[t[both]] == sides[g[both]]), both.sum()]
+            if upright and both.any():
+                # would one left/right decision per frame help? the forest's own tally of its
+                # sides against image x, and how mixed the frame's sided labels are
+                r_, c_ = np.nonzero(sel)
+                dx = c_ - c_.mean()
+                p_side = probs[r_, c_][:, sided]
+                lr = np.where(sides[sided] == "l_", 1.0, -1.0)
+                truth_sign = np.sum((np.where(sides[t] == "l_", 1.0, -1.0) * dx)[sided[t]])
+                tally[0] += np.sign((p_side @ lr) @ dx) == np.sign(truth_sign)
+                acc = np.mean(sides[t[both]] == sides[g[both]])
+                tally[1] += 0.3 <= acc <= 0.7
+                tally[2] += 1
             prop = joint_proposals(frame.depth, probs, camera, k=3, forest=forest)
             timing.setdefault(cam_name, []).append([t_labels - t_start, time.perf_counter() - t_labels])
             dist = np.linalg.norm(prop.positions - frame.joints[:, None], axis=2)
@@ -370,6 +460,10 @@ def evaluate(forest, source, n_frames, quiet, label):
             "recall": dict(zip(BODY_PARTS, recall.round(4).tolist())),
             "facing_correct_upright": float(facing[0, 0] / facing[0, 1]) if facing[0, 1] else None,
             "facing_correct_rotated": float(facing[1, 0] / facing[1, 1]) if facing[1, 1] else None,
+            "side_axis_correct_upright": float(side_axis[0, 0] / side_axis[0, 1]) if side_axis[0, 1] else None,
+            "side_axis_correct_rotated": float(side_axis[1, 0] / side_axis[1, 1]) if side_axis[1, 1] else None,
+            "frame_side_tally_correct_upright": float(tally[0] / max(tally[2], 1)),
+            "frames_side_mixed_upright": float(tally[1] / max(tally[2], 1)),
             "left_right_correct_upright": float(side[0, 0] / max(side[0, 1], 1)),
             "left_right_correct_rotated": float(side[1, 0] / max(side[1, 1], 1)),
             "joint_within_10cm_any_of_3": float(hit_any.sum() / (frames.sum() * len(JOINT_NAMES))),
@@ -391,8 +485,11 @@ def print_report(results):
                                      for n in names))
     keys = ("facing_correct_upright", "facing_correct_rotated") if results[names[0]]["facing_correct_upright"] \
         is not None else ()
+    if results[names[0]]["side_axis_correct_upright"] is not None:
+        keys = (*keys, "side_axis_correct_upright", "side_axis_correct_rotated")
     for key in ("pixel_accuracy", "side_free_pixel_accuracy", *keys, "left_right_correct_upright",
-                "left_right_correct_rotated", "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
+                "left_right_correct_rotated", "frame_side_tally_correct_upright", "frames_side_mixed_upright",
+                "joint_within_10cm_any_of_3", "joint_within_10cm_top1",
                 "upright_within_10cm_any_of_3", "rotated_within_10cm_any_of_3"):
         print(f"{key:32}" + "".join(f" {results[n][key]:10.3f} ({n})" for n in names))
     print("per joint, a proposal (of 3) within 10 cm:")
@@ -406,7 +503,7 @@ def print_report(results):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
-                                 epilog="example: nice -n 10 .venv/bin/python tools/train_recognizer.py --seed 0")
+                                 epilog="example: nice -n 10 .venv/bin/python tools/train_recognizer.py --seed 0 --frames 3000 --extras centroid --trees 4")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--frames", type=int, default=1800, help="training frames (default 1800)")
     ap.add_argument("--pixels", type=int, default=400, help="sampled pixels per training frame")
@@ -417,12 +514,20 @@ def main(argv=None):
     ap.add_argument("--upright", type=float, default=0.6, help="share of upright training frames (default 0.6)")
     ap.add_argument("--max-features", type=int, default=40, help="offset pairs tried per split")
     ap.add_argument("--min-leaf", type=int, default=10, help="fewest training pixels per leaf")
+    ap.add_argument("--extras", choices=("none", "centroid", "centroid+side"), default="none",
+                    help="per-pixel inputs besides the offset pairs: centroid = offset from the person's centre (m); "
+                         "centroid+side = also a side stage's frame estimate of where the subject's left is")
+    ap.add_argument("--side-depth", type=int, default=16, help="depth of the side stage's trees")
     ap.add_argument("--orientation", action="store_true",
                     help="add the (experimental) first stage that estimates the body's axes")
     ap.add_argument("--calib-frames", type=int, default=100, help="frames for the push-back fit")
     ap.add_argument("--eval-frames", type=int, default=120, help="frames per evaluation set")
     ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data")
     ap.add_argument("--out", type=Path, default=default_path())
+    ap.add_argument("--cache", type=Path, default=None,
+                    help="keep the rendered training set in this .npz and reuse it when the frame settings match")
+    ap.add_argument("--sets", default="held-out,dev,test",
+                    help="evaluation sets, comma-separated (default held-out,dev,test; tune without test)")
     ap.add_argument("--eval-only", action="store_true", help="evaluate the model at --out, train nothing")
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args(argv)
@@ -440,12 +545,19 @@ def main(argv=None):
         rng = np.random.default_rng(args.seed)
         offsets = sample_offsets(args.candidates, rng, radius=args.radius)
         source = FrameSource(sets["train"], args.seed, upright_fraction=args.upright)
-        data = make_training_set(source, args.frames, offsets, args.pixels, args.quiet)
+        data = cached_training_set(args, source, offsets)
         X, y = data["X"], data["y"]
         t_data = time.perf_counter() - t0
         forest = PartForest(offsets, None, Trees(np.zeros(1), np.zeros(1), [-1], [0], [0], np.ones((1, NUM_PARTS))),
                             np.zeros(len(JOINT_NAMES)))
         extras, angle = None, np.array([np.nan])
+        if args.extras != "none":
+            extras = centroid_features(data["P"], data["centres"][data["frame"]])
+            forest.meta["extras"] = args.extras
+        if args.extras == "centroid+side":
+            forest.side, side_est = fit_side(X, data, args, rng)
+            s = side_est[data["frame"]]
+            extras = np.hstack([extras, s, (extras[:, :2] * s).sum(1, keepdims=True)]).astype(np.float32)
         if args.orientation:
             # stage 1: the body's axes per pixel (regression), one estimate per frame at run time
             target = np.concatenate([data["axes"][data["frame"], :, 0], data["axes"][data["frame"], :, 1]], axis=1)
@@ -463,15 +575,18 @@ def main(argv=None):
             max_depth=args.max_depth, min_samples_leaf=args.min_leaf, max_features=args.max_features,
             random_state=seed), X, y, args.trees, args.candidates, rng, extras=extras, label="part tree")
         forest.parts = export_trees(trees, fsets, args.candidates, classes=NUM_PARTS)
+        source.release()
+        # fresh train-motion frames of their own seed, so a run from --cache fits the same push-back
+        source = FrameSource(sets["train"], args.seed + 500, upright_fraction=args.upright)
         check_export(forest, trees, fsets, offsets, source)
         del X, extras, data
         forest.push_back = fit_push_back(forest, source, args.calib_frames, args.quiet)
         source.release()
-        forest.meta = {"trained_by": "tools/train_recognizer.py", "seed": args.seed, "frames": args.frames,
+        forest.meta = {**forest.meta, "trained_by": "tools/train_recognizer.py", "seed": args.seed, "frames": args.frames,
                        "pixels_per_frame": args.pixels, "candidates": args.candidates, "trees": args.trees,
                        "max_depth": args.max_depth, "samples": int(len(y)), "radius": args.radius,
                        "upright": args.upright, "max_features": args.max_features, "min_leaf": args.min_leaf,
-                       "orientation_stage": bool(args.orientation),
+                       "orientation_stage": bool(args.orientation), "side_depth": args.side_depth if args.extras == "centroid+side" else None,
                        "orientation_error_median_deg": round(float(np.median(angle)), 1) if args.orientation else None,
                        "train_motions": [n for n, _ in sets["train"]], "train_seconds": round(time.perf_counter() - t0)}
         forest.save(args.out)        # evaluate what ships: float16 offsets and thresholds, uint8 leaves
@@ -482,7 +597,7 @@ def main(argv=None):
     results = {}
     for name, motions, seed in (("held-out", sets["train"], args.seed + 1000), ("dev", sets["dev"], args.seed + 2000),
                                 ("test", sets["test"], args.seed + 3000)):
-        if motions:
+        if motions and name in args.sets.split(","):
             src = FrameSource(motions, seed)
             results[name] = evaluate(forest, src, args.eval_frames, args.quiet, f"{name} frames")
             src.release()

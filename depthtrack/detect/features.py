@@ -106,6 +106,62 @@ def pair_features(image, rows, cols, d, offsets, fx: float, fy: float) -> np.nda
     return a - b
 
 
+#: Per-pixel inputs of a forest trained with ``extras="centroid"``: the pixel's camera-frame
+#: offset (m) from the centre of the person's points (see :func:`centroid_features`).
+CENTROID_NAMES = ("dx", "dy", "dz")
+
+
+def centroid_features(points, centre) -> np.ndarray:
+    """Each point's camera-frame offset from the person's centre, as extra split inputs.
+
+    Depth differences see only the pixel's neighbourhood (within the offsets' reach); where
+    the pixel lies in the whole silhouette (above the centre on an upright body: head and
+    shoulders; far from it: hands and feet; nearer the camera than it: what is held out in
+    front) is one cheap column each, in metres so it does not change with distance.
+
+    Parameters
+    ----------
+    points : (N, 3) float
+        Camera-frame points of the pixels.
+    centre : (3,) float
+        Mean of all the person's points.
+
+    Returns
+    -------
+    (N, 3) float32
+        :data:`CENTROID_NAMES`.
+    """
+    return (np.asarray(points, np.float64) - np.asarray(centre, np.float64)).astype(np.float32)
+
+
+#: Per-pixel inputs a forest with a side stage adds to :data:`CENTROID_NAMES`.
+SIDE_NAMES = ("left_x", "left_y", "along_left")
+
+
+def side_features(offsets, left) -> np.ndarray:
+    """The frame's estimated image-plane direction of the subject's left and each pixel's
+    place along it.
+
+    Parameters
+    ----------
+    offsets : (N, 3) float
+        From :func:`centroid_features`.
+    left : (2,) float
+        Camera x and y components of the subject's left axis, as the side stage estimates
+        them for the whole frame (averaged over its pixels, so short of unit length where
+        the pixels disagree).
+
+    Returns
+    -------
+    (N, 3) float32
+        :data:`SIDE_NAMES`: ``left_x, left_y`` and ``dx left_x + dy left_y`` (m).
+    """
+    offsets = np.asarray(offsets, np.float32)
+    left = np.asarray(left, np.float32)
+    n = len(offsets)
+    return np.column_stack([np.broadcast_to(left, (n, 2)), offsets[:, :2] @ left]).astype(np.float32)
+
+
 #: Per-pixel inputs besides the offset pairs: the frame's estimated body axes and the
 #: pixel's place along them (see :func:`body_frame_features`).
 BODY_FRAME_NAMES = ("forward_x", "forward_y", "forward_z", "up_x", "up_y", "up_z", "along_left", "along_up")

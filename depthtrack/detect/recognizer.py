@@ -5,7 +5,9 @@ images" (CVPR 2011): randomized decision trees over depth-invariant depth-differ
 features (:mod:`.features`) label every person pixel with one of :data:`BODY_PARTS`
 (:mod:`.recognizer_parts`); mean shift over the back-projected pixels, weighted by the
 part's probability times the pixel's surface area, finds each part's modes, and each mode
-pushed a learned depth behind the surface proposes a joint.
+pushed a learned depth behind the surface proposes a joint. The shipped trees also split
+on each pixel's offset from the centre of the person's points (``meta["extras"] ==
+"centroid"``, :func:`~depthtrack.detect.features.centroid_features`).
 
 An optional first stage (not in the shipped model, see the README): regression trees
 estimate the body's axes (where the torso faces, where its head is) from every pixel,
@@ -34,7 +36,7 @@ import numpy as np
 
 from ..contract import JOINT_NAMES
 from ..errors import InputError
-from .features import body_frame_features, pair_features, probe_image
+from .features import body_frame_features, centroid_features, pair_features, probe_image, side_features
 from .recognizer_parts import BODY_PARTS, JOINT_PARTS, PART_ID
 
 FORMAT = "depthtrack-recognizer/1"
@@ -138,22 +140,36 @@ class PartForest:
     parts : Trees
         Classification trees over the offset pairs (and, after an orientation stage, the
         body-frame inputs): the :data:`BODY_PARTS` distribution per pixel.
+    side : Trees or None
+        Optional side stage (``train_recognizer.py --extras centroid+side``): regression trees
+        giving per pixel the camera x and y of the subject's left axis, averaged over the
+        person to one estimate per frame, which the part trees then split on.
     push_back : (15,) float32
         Metres a joint lies behind its part's surface mode (camera z).
     meta : dict
-        How the forest was trained.
+        How the forest was trained; ``meta["extras"]`` names the per-pixel extra inputs.
     """
 
-    def __init__(self, offsets, orient: Trees | None, parts: Trees, push_back, meta=None):
+    def __init__(self, offsets, orient: Trees | None, parts: Trees, push_back, meta=None, side: Trees | None = None):
         self.offsets = np.asarray(offsets, np.float32)
+        self.side = side
         self.orient = orient
         self.parts = parts
         self.push_back = np.asarray(push_back, np.float32)
         self.meta = dict(meta or {})
+        if self.extras not in ("none", "centroid", "centroid+side") or (self.extras == "centroid+side") != (side is not None):
+            raise ValueError(f"unknown per-pixel extras {self.extras!r}")
         if parts.leaf_values.shape[1] != len(BODY_PARTS) \
                 or (orient is not None and orient.leaf_values.shape[1] != 6) \
                 or self.push_back.shape != (len(JOINT_NAMES),):
             raise ValueError("forest does not match BODY_PARTS / the contract joints")
+
+    @property
+    def extras(self) -> str:
+        """Per-pixel inputs the part trees split on besides the offset pairs (without an
+        orientation stage): ``"none"``, ``"centroid"`` (:func:`~depthtrack.detect.features.centroid_features`),
+        or ``"centroid+side"`` (and :func:`~depthtrack.detect.features.side_features` from :attr:`side`)."""
+        return self.meta.get("extras", "none")
 
     # ------------------------------------------------------------------ files
     def save(self, path) -> None:
@@ -163,6 +179,8 @@ class PartForest:
         meta = {**self.meta, "format": FORMAT, "parts": list(BODY_PARTS), "joints": list(JOINT_NAMES)}
         orient = {} if self.orient is None else {**self.orient.arrays("orient_"),
                                                  "orient_values": self.orient.leaf_values.astype(np.float16)}
+        if self.side is not None:
+            orient.update(self.side.arrays("side_"), side_values=self.side.leaf_values.astype(np.float16))
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez_compressed(
@@ -181,7 +199,8 @@ class PartForest:
                 probs = z["parts_values"].astype(np.float32) / 255.0
                 probs /= np.maximum(probs.sum(axis=1, keepdims=True), 1e-6)
                 orient = Trees.from_arrays(z, "orient_", z["orient_values"]) if "orient_values" in z else None
-                return cls(z["offsets"], orient, Trees.from_arrays(z, "parts_", probs), z["push_back"], meta)
+                side = Trees.from_arrays(z, "side_", z["side_values"]) if "side_values" in z else None
+                return cls(z["offsets"], orient, Trees.from_arrays(z, "parts_", probs), z["push_back"], meta, side)
         except (OSError, KeyError, ValueError) as exc:
             raise InputError(path, f"cannot read the recogniser model ({exc})") from None
 
@@ -197,6 +216,14 @@ class PartForest:
         up = v[3:] - (v[3:] @ forward) * forward
         return forward, up / max(np.linalg.norm(up), 1e-9)
 
+    def side_axis(self, image, rows, cols, fx: float, fy: float, max_pixels: int = 800) -> np.ndarray:
+        """(2,) camera x, y of the subject's left axis from evenly thinned pixels (side stage;
+        zeros without one)."""
+        if self.side is None or not len(rows):
+            return np.zeros(2, np.float32)
+        step = max(1, int(np.ceil(len(rows) / max_pixels)))
+        return self.side.predict(image, rows[::step], cols[::step], self.offsets, fx, fy).mean(axis=0)
+
     def predict(self, image, rows, cols, points, fx: float, fy: float, orientation=None):
         """Part probabilities ``(N, C)`` of pixels, and the ``(forward, up)`` used.
 
@@ -211,7 +238,12 @@ class PartForest:
             Default: estimated with :meth:`orientation`.
         """
         if self.orient is None:
-            return self.parts.predict(image, rows, cols, self.offsets, fx, fy), None
+            extras = None
+            if self.extras != "none":
+                extras = centroid_features(points, points.mean(axis=0))
+            if self.side is not None:
+                extras = np.hstack([extras, side_features(extras, self.side_axis(image, rows, cols, fx, fy))])
+            return self.parts.predict(image, rows, cols, self.offsets, fx, fy, extras), None
         if orientation is None:
             orientation = self.orientation(image, rows, cols, fx, fy)
         extras = body_frame_features(points, points.mean(axis=0), *orientation)
