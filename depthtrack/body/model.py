@@ -10,7 +10,7 @@ import numpy as np
 
 from ..contract import JOINT_NAMES
 from .mesh import SkinnedMesh, linear_blend_skinning
-from .shape import BodyShape, segment_lengths, shaped_offsets, surface_maps
+from .shape import BodyShape, read_json_source, segment_lengths, shaped_offsets, surface_maps
 from .skeleton import (CONTRACT_SOURCE, DOF, JOINTS, JOINT_ID, LOWER, NUM_JOINTS, PARENTS,
                        POSE_NAMES, UPPER, as_batch, children_of, forward_kinematics)
 
@@ -267,20 +267,7 @@ class BodyModel:
         """
         from ..errors import InputError
 
-        path = None
-        data = source
-        if not isinstance(source, dict):
-            text = str(source)
-            if not text.lstrip().startswith("{"):
-                path = Path(source)
-                try:
-                    text = path.read_text(encoding="utf-8")
-                except OSError as exc:
-                    raise InputError(path, f"cannot read body: {exc.strerror or exc}") from None
-            try:
-                data = json.loads(text)
-            except json.JSONDecodeError as exc:
-                raise InputError(path, f"not valid JSON: {exc.msg} (line {exc.lineno})") from None
+        data, path = read_json_source(source if isinstance(source, (dict, Path)) else str(source), "body")
         if not isinstance(data, dict) or data.get("format") != BODY_FORMAT:
             raise InputError(path, f"not a body file (expected \"format\": \"{BODY_FORMAT}\")")
         mesh = data.get("mesh", "full")

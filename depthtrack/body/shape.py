@@ -109,6 +109,33 @@ def _correlation() -> np.ndarray:
 SHAPE_CORRELATION = _correlation()
 
 
+def read_json_source(source, what: str):
+    """JSON from a file path, from JSON text or an already parsed dict.
+
+    Returns
+    -------
+    (data, path) : the parsed value and the file's Path (None for text or a dict).
+
+    Raises
+    ------
+    InputError
+        An unreadable file or invalid JSON, naming the file.
+    """
+    if isinstance(source, dict):
+        return source, None
+    path, text = None, source
+    if isinstance(source, Path) or (isinstance(source, str) and not source.lstrip().startswith("{")):
+        path = Path(source)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputError(path, f"cannot read {what}: {getattr(exc, 'strerror', None) or exc}") from None
+    try:
+        return json.loads(text), path
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"not valid JSON: {exc.msg} (line {exc.lineno})") from None
+
+
 @dataclass(frozen=True)
 class BodyShape:
     """Relative body proportions (1 = the default body); fields and ranges in the module docstring."""
@@ -184,18 +211,7 @@ class BodyShape:
     def from_json(cls, source) -> "BodyShape":
         """From JSON text or a file path: the fields, or an object with a ``shape`` block
         (a track's ``body.json``, or a sequence's ``synth`` block)."""
-        path = None
-        text = source
-        if isinstance(source, Path) or (isinstance(source, str) and not source.lstrip().startswith("{")):
-            path = Path(source)
-            try:
-                text = path.read_text(encoding="utf-8")
-            except OSError as exc:
-                raise InputError(path, f"cannot read body shape: {exc.strerror or exc}") from None
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InputError(path, f"not valid JSON: {exc.msg} (line {exc.lineno})") from None
+        data, path = read_json_source(source, "body shape")
         if isinstance(data, dict) and isinstance(data.get("shape"), dict):
             data = data["shape"]
         return cls.from_dict(data, path)
