@@ -29,7 +29,7 @@ import numpy as np
 from ..body.rotations import rotvec_to_matrix
 from ..io.atomic import write_text_atomic
 from ..io.bvh import body_end_sites, matrix_to_euler
-from ..io.bvh.write import format_bvh
+from ..io.bvh.write import format_bvh, skeleton_and_poses
 from ..motion.retarget import rotation_between
 from .axes import UP_AXES
 
@@ -67,14 +67,8 @@ def bvh_text(body, poses, fps: float, rest: str = "tpose", up: str = "y", units_
     """The BVH file's text for finite ``poses (F, D)``; see the module docstring."""
     if up not in UP_AXES:
         raise ValueError(f"up must be one of {sorted(UP_AXES)}, not {up!r}")
-    poses = np.atleast_2d(np.asarray(poses, dtype=float))
-    names = list(body.joint_names)
-    parents = np.asarray(body.parents)
+    poses, names, parents = skeleton_and_poses(body, poses)
     J = len(names)
-    if poses.ndim != 2 or poses.shape[1] != 6 + 3 * (J - 1):
-        raise ValueError(f"poses must be (F, {6 + 3 * (J - 1)}), not {poses.shape}")
-    if not np.all(np.isfinite(poses)):
-        raise ValueError("poses hold non-finite values")
     V = UP_AXES[up]
     G = rest_rotations(body, rest)
     base = np.asarray(body.offsets, float)

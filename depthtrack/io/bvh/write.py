@@ -48,6 +48,25 @@ def body_end_sites(body) -> dict:
     return ends
 
 
+def skeleton_and_poses(body, poses):
+    """``poses`` as a checked (F, D) float array, with the body's joint names and parents.
+
+    Raises
+    ------
+    ValueError
+        Poses of the wrong shape for the body, or non-finite ones (a BVH has no "unknown").
+    """
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    names = list(body.joint_names)
+    parents = np.asarray(body.parents)
+    D = 6 + 3 * (len(names) - 1)
+    if poses.ndim != 2 or poses.shape[1] != D:
+        raise ValueError(f"poses must be (F, {D}), not {poses.shape}")
+    if not np.all(np.isfinite(poses)):
+        raise ValueError("poses hold non-finite values")
+    return poses, names, parents
+
+
 def write_bvh(path, body, poses, fps: float, units_m: float = 1.0) -> None:
     """Write pose vectors of our body model as a BVH file (atomically).
 
@@ -69,14 +88,8 @@ def write_bvh(path, body, poses, fps: float, units_m: float = 1.0) -> None:
         Metres per written unit (1.0 = metres, 0.01 = centimetres).
     """
 
-    poses = np.atleast_2d(np.asarray(poses, dtype=float))
-    names = list(body.joint_names)
-    parents = np.asarray(body.parents)
+    poses, names, parents = skeleton_and_poses(body, poses)
     J = len(names)
-    if poses.ndim != 2 or poses.shape[1] != 6 + 3 * (J - 1):
-        raise ValueError(f"poses must be (F, {6 + 3 * (J - 1)}), not {poses.shape}")
-    if not np.all(np.isfinite(poses)):
-        raise ValueError("poses hold non-finite values")
     C = BVH_FROM_CAMERA
     offsets = np.asarray(body.offsets, float) @ C.T / units_m
     ends = {j: (C @ e) / units_m for j, e in body_end_sites(body).items()}
