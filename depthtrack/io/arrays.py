@@ -15,13 +15,13 @@ import numpy as np
 
 from ..camera import Camera
 from ..contract import JOINT_NAMES
-from .sequence import depth_to_raw
+from .sequence import FrameIteration, depth_to_raw
 
 #: Frames read per visit to the recording file.
 BATCH = 16
 
 
-class RecordingSequence:
+class RecordingSequence(FrameIteration):
     """Frames by index from a recording; implements :class:`~depthtrack.io.registry.DepthSequence`.
 
     Attributes
@@ -57,18 +57,6 @@ class RecordingSequence:
     # -- the interface
     def __len__(self) -> int:
         return len(self._timestamps)
-
-    def __iter__(self):
-        for i in range(len(self)):
-            yield self.depth(i)
-
-    def __repr__(self):
-        return (f"{type(self).__name__}({str(self.path)!r}, frames={len(self)}, fps={self.fps:g}, "
-                f"camera={self.camera.width}x{self.camera.height})")
-
-    @property
-    def duration(self) -> float:
-        return len(self) / self.fps
 
     @property
     def timestamps(self) -> np.ndarray:

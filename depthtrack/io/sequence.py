@@ -158,7 +158,25 @@ def _build_meta(camera: Camera, fps, depth_scale, subject=None, extra=None) -> d
 
 
 # ------------------------------------------------------------------- sequence
-class Sequence:
+class FrameIteration:
+    """What every sequence class derives from ``len``, ``depth(i)``, ``path``, ``fps`` and
+    ``camera``: iteration over the depth frames, a repr and the duration."""
+
+    def __iter__(self):
+        for i in range(len(self)):
+            yield self.depth(i)
+
+    def __repr__(self):
+        return (f"{type(self).__name__}({str(self.path)!r}, frames={len(self)}, fps={self.fps:g}, "
+                f"camera={self.camera.width}x{self.camera.height})")
+
+    @property
+    def duration(self) -> float:
+        """Seconds covered by the frames."""
+        return len(self) / self.fps
+
+
+class Sequence(FrameIteration):
     """A depth sequence opened from a directory or a ``.npz``; frames load on demand.
 
     Attributes
@@ -193,19 +211,6 @@ class Sequence:
 
     def __len__(self) -> int:
         return self._n
-
-    def __iter__(self):
-        for i in range(self._n):
-            yield self.depth(i)
-
-    def __repr__(self):
-        return (f"Sequence({str(self.path)!r}, frames={self._n}, fps={self.fps}, "
-                f"camera={self.camera.width}x{self.camera.height})")
-
-    @property
-    def duration(self) -> float:
-        """Seconds covered by the frames."""
-        return self._n / self.fps
 
     @property
     def timestamps(self) -> np.ndarray:
