@@ -224,6 +224,12 @@ def test_export_cli_raw_and_smoothed(track, tmp_path, capsys):
         err = capsys.readouterr().err
         assert "Traceback" not in err and argv[1] in err.strip().splitlines()[-1]
         assert not (tmp_path / "bad").exists()
+    # the track itself is no export place: its track.bvh and joints.csv would be replaced
+    before = (track["dir"] / "track.bvh").read_bytes()
+    assert main(["export", str(track["dir"]), "--format", "bvh", "-o", str(track["dir"])]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "is the track itself" in err
+    assert (track["dir"] / "track.bvh").read_bytes() == before
 
 
 def test_track_writes_exports_beside_the_track(tmp_path):

@@ -69,7 +69,7 @@ def export_track_outputs(out_dir, body, poses, joints, fps, formats, smooth="non
 
 
 def run(args) -> int:
-    from ..evaluate.runs import body_for_track
+    from ..evaluate.runs import body_for_track_dir
     from ..export.registry import parse_formats
     from ..io.track_output import read_track
     from ..motion.smoothing import parse_smoothing
@@ -80,7 +80,12 @@ def run(args) -> int:
     if track.poses.shape[1] != 48:
         raise InputError(Path(args.track) / "poses.npz", "poses are not of the default body model (48 values)")
     out = Path(args.out) if args.out else Path(args.track) / "exports"
-    body = body_for_track(track)
+    if out.resolve() == Path(args.track).resolve():
+        # the exports' names (track.bvh, joints.csv) are the track's own files
+        raise InputError(out, "is the track itself; export into another directory (default TRACK_DIR/exports)")
+    if out.exists() and not out.is_dir():
+        raise InputError(out, "exists and is not a directory")
+    body = body_for_track_dir(args.track, track)      # the fitted shape when the track has body.json
     written = export_track_outputs(out, body, track.poses, track.joints, track.fps, formats,
                                    args.smooth, args.up)
     if not args.quiet:
