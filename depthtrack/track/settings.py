@@ -1,7 +1,8 @@
 """The tracker's settings, one frozen group per stage, validated when made.
 
 :class:`TrackerSettings` nests one group per stage of a frame (see :mod:`.tracker` for the
-stages): ``observe``, ``energy``, ``search``, ``associate``, ``polish``, ``judge``, and the
+stages): ``observe``, ``energy``, ``search``, ``associate``, ``polish``, ``judge``,
+``propose`` (the part recogniser's joint proposals, used by the start and the judge), and the
 starts: ``start`` (the global search of the first frame and of a recovery), ``heading``
 (the front/back check after an automatic start), ``height`` (the body-height fit) and
 ``shape`` (the body-shape fit from the first frames).
@@ -231,6 +232,40 @@ class JudgeSettings:
 
 
 @dataclass(frozen=True)
+class ProposalSettings:
+    """The part recogniser's joint proposals in the tracker (:mod:`.proposals`; "ep" and "hc+ep").
+
+    ``enabled``: run the recogniser on every frame. Its side-free proposals of at least
+    ``min_confidence`` (m^2 of part surface) give the global search candidates
+    (``start_candidates``) and the judge a second opinion: a pose with more than
+    ``lost_fraction`` of its checked trunk joints farther than ``distance`` (m) from every
+    proposal disagrees; ``lost_frames`` such frames in a row and the track counts as lost
+    (reason ``"proposals"``), and a recovered pose replaces it when it disagrees less and
+    leaves at most ``accept_margin`` more of the observation unexplained. ``start_weight``
+    times the foreground's pixel count times the disagreeing share is added to every start
+    finalist's score.
+    """
+
+    enabled: bool = True
+    min_confidence: float = 0.002
+    distance: float = 0.3
+    lost_fraction: float = 0.5
+    lost_frames: int = 3
+    accept_margin: float = 0.1
+    start_candidates: bool = True
+    start_weight: float = 0.1
+
+    def __post_init__(self):
+        _check(isinstance(self.enabled, bool), f"ProposalSettings.enabled must be true or false, "
+                                               f"not {self.enabled!r}")
+        _check(isinstance(self.start_candidates, bool),
+               f"ProposalSettings.start_candidates must be true or false, not {self.start_candidates!r}")
+        _positive(self, "distance", "lost_frames")
+        _positive(self, "min_confidence", "lost_fraction", "accept_margin", "start_weight",
+                  allow_zero=True)
+
+
+@dataclass(frozen=True)
 class StartSettings:
     """The global search of an automatic start and of a recovery (:mod:`.start`).
 
@@ -295,6 +330,13 @@ class HeadingSettings:
     without the motion prior (likelihood plus pose prior) is lower by ``recheck_margin``
     times the foreground's pixel count, and replaces the track after ``votes`` votes in a
     row.
+
+    Small wins add up too: each recheck adds the twin's lead (energy difference per
+    foreground pixel) less ``evidence_drift`` to a running sum that never goes below zero
+    (Page's CUSUM test), and the twin takes over when the sum passes ``evidence_threshold``
+    (0 = off). A profile view gives the right heading a steady small lead, below
+    ``recheck_margin``; a frontal view, where the twins explain the image equally well,
+    gives leads of either sign that the drift cancels.
     """
 
     frames: int = 10
@@ -303,9 +345,12 @@ class HeadingSettings:
     recheck_margin: float = 0.05
     votes: int = 2
     twin_passes: int = 1
+    evidence_drift: float = 0.01
+    evidence_threshold: float = 0.1
 
     def __post_init__(self):
-        _positive(self, "frames", "margin", "every", "recheck_margin", allow_zero=True)
+        _positive(self, "frames", "margin", "every", "recheck_margin", "evidence_drift",
+                  "evidence_threshold", allow_zero=True)
         _positive(self, "votes", "twin_passes")
 
 
@@ -368,6 +413,7 @@ class ShapeSettings:
 #: Group name -> settings class, in the order of a frame.
 GROUPS = {"observe": ObserveSettings, "energy": EnergySettings, "search": SearchSettings,
           "associate": AssociateSettings, "polish": PolishSettings, "judge": JudgeSettings,
+          "propose": ProposalSettings,
           "start": StartSettings, "heading": HeadingSettings, "height": HeightSettings,
           "shape": ShapeSettings}
 
@@ -411,6 +457,7 @@ class TrackerSettings:
     associate: AssociateSettings = field(default_factory=AssociateSettings)
     polish: PolishSettings = field(default_factory=PolishSettings)
     judge: JudgeSettings = field(default_factory=JudgeSettings)
+    propose: ProposalSettings = field(default_factory=ProposalSettings)
     start: StartSettings = field(default_factory=StartSettings)
     heading: HeadingSettings = field(default_factory=HeadingSettings)
     height: HeightSettings = field(default_factory=HeightSettings)

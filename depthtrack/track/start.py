@@ -6,6 +6,11 @@ foreground's and shifted along that axis, scored in one batch; the best
 :attr:`StartSettings.shortlist` are refined on the root, the best
 :attr:`StartSettings.finalists` on every joint (and, for "ep" / "hc+ep", associated with the
 frame's part detections), and the lowest energy plus the heading prior wins.
+
+With the part recogniser on (:class:`~.settings.ProposalSettings`), poses fitted to its
+joint proposals join the candidates and always reach the shortlist -- a start in any
+orientation, lying or upside down -- and every finalist's score also counts the share of the
+trunk proposals it disagrees with (:func:`~.proposals.disagreement`).
 """
 from __future__ import annotations
 
@@ -17,6 +22,7 @@ from ..errors import InputError
 from ..motion.retarget import rotation_between
 from .observation import robust_points
 from .propagate import associate_stage
+from .proposals import disagreement, frame_proposals, proposal_candidates
 from .search import climb
 
 #: Arm poses tried by the global search: (shoulder rx, left shoulder rz) in radians
@@ -156,34 +162,60 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
     # the visible surface lies in front of the body's centre: push back along the ray
     centre = centre + g.centre_push * centre / np.linalg.norm(centre)
     poses, n_rot = candidate_poses(points, up, centre, tracker.render_body, tracker.settings)
-    kappa = g.facing_prior * float(np.count_nonzero(fg.mask))
+    n_grid = len(poses)
+    p = tracker.settings.propose
+    proposals = frame_proposals(tracker, frame)
+    if proposals is not None and p.start_candidates:
+        fitted = proposal_candidates(tracker.body, proposals, p.min_confidence)
+        # the limbs' proposals are the least reliable: each fit also with every arm pose
+        armed = np.repeat(fitted, len(ARM_POSES), axis=0)
+        for k, (rx, rz) in enumerate(ARM_POSES.values()):
+            armed[k::len(ARM_POSES), ARM_SLOTS] = rx, rz, rx, -rz
+        poses = np.concatenate([poses, fitted, armed])
+    pixels = float(np.count_nonzero(fg.mask))
+    kappa = g.facing_prior * pixels
     energies = energy(poses)
     prior_up = up if body_axis is None else np.asarray(body_axis, dtype=np.float64)
     facing = facing_penalty(poses, kappa, prior_up, heading)
     order = np.argsort(energies + facing)
+    shortlist = list(order[:g.shortlist])
+    ours = [i for i in order if i >= n_grid]
+    if ours and ours[0] not in shortlist:
+        shortlist.append(ours[0])          # the recogniser's best start always gets a hearing
     climber = tracker.climbers.start
     root_blocks = climber.blocks[:g.root_blocks]
     coarse = []
-    for i in order[:g.shortlist]:
+    for i in shortlist:
         x, e = climb(energy, climber, poses[i], rec, start_energy=energies[i], blocks=root_blocks,
                      passes=g.root_passes)
         coarse.append((e, int(i), x))
     coarse.sort(key=lambda c: c[0])
     best = None
     finalists = []
-    for e, i, x in coarse[:g.finalists]:
+    chosen = coarse[:g.finalists]
+    from_proposals = [c for c in coarse if c[1] >= n_grid]
+    if from_proposals and all(c[1] < n_grid for c in chosen):
+        chosen.append(from_proposals[0])     # the recogniser's best guess always gets a hearing
+    for e, i, x in chosen:
         x, e = climb(energy, climber, x, rec, start_energy=e, passes=g.passes)
         if tracker.method != "hc" and tracker.detector is not None:
             x, e, _ = associate_stage(tracker, energy, frame, x, e)
             x, e = climb(energy, climber, x, rec, start_energy=e, level_offset=g.associate_level)
         score = e + float(facing_penalty(x[None], kappa, prior_up, heading)[0])
+        if proposals is not None:
+            off, _ = disagreement(tracker.body.joint_positions(x), proposals, p.min_confidence,
+                                  p.distance)
+            score += p.start_weight * pixels * float(off)
         finalists.append({"candidate": int(i), "energy": round(float(e), 1),
-                          "score": round(score, 1)})
+                          "score": round(score, 1),
+                          "from": "proposals" if i >= n_grid else "grid"})
         if best is None or score < best[0]:
             best = (score, i, x, e)
     _, i, x, e = best
     info = {"candidates": int(len(poses)), "orientations": int(n_rot),
-            "chosen_orientation": int(i % n_rot),
-            "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)],
+            "proposal_candidates": int(len(poses) - n_grid),
+            "chosen_from": "proposals" if i >= n_grid else "grid",
+            "chosen_orientation": int(i % n_rot) if i < n_grid else None,
+            "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
             "finalists": finalists}
     return x, e, info

@@ -42,6 +42,10 @@ class TrackingState:
         was lost; None = closed unrecovered after :attr:`JudgeSettings.max_lost_frames`).
     heading_votes : int
         Heading rechecks in a row that preferred the turned twin (:mod:`.heading`).
+    proposal_misses : int
+        Frames in a row whose pose the recogniser's proposals disagree with (:mod:`.proposals`).
+    heading_evidence : float
+        The rechecks' accumulated evidence for the twin (a CUSUM, :func:`.heading.recheck_heading`).
     heading_switches : tuple of dict
         Each time a recheck replaced the track by its turned twin: ``frame``, energies.
     """
@@ -57,6 +61,8 @@ class TrackingState:
     lost: dict | None = None
     recoveries: tuple = ()
     heading_votes: int = 0
+    heading_evidence: float = 0.0
+    proposal_misses: int = 0
     heading_switches: tuple = ()
 
     @property

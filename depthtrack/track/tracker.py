@@ -43,7 +43,7 @@ from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
 from .heading import recheck_heading, swapped_twin, turned_pose
-from .judge import judge_frame, loss_reason, recover, unexplained
+from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage
 from .record import Recorder
@@ -112,6 +112,10 @@ class Tracker:
             from ..detect import detect_parts as detector
         self.detector = detector
         self.parts = PartModel.from_body(body)
+        self.forest = None
+        if method != "hc" and s.propose.enabled:
+            from ..detect.recognizer import load_forest
+            self.forest = load_forest()
         self.climbers = Climbers.build(s, self.fps, clip=body.clip)
         self.recorder = Recorder()
         self.state = TrackingState(velocity=np.zeros(body.dof))
@@ -200,7 +204,8 @@ class Tracker:
             x, e, info = global_search(self, energy, frame)
             info = {"mode": "automatic", **info, "energy": float(e)}
         state = state.logged({"energy": e, "cost": unexplained(energy, x)}, pose=x,
-                             velocity=np.zeros(self.body.dof), init_info=info)
+                             velocity=np.zeros(self.body.dof), init_info=info,
+                             heading_votes=0, heading_evidence=0.0, proposal_misses=0)
         self.recorder.add("init", time.perf_counter() - t0)
         if not self.recorder.initialised():
             self.recorder.count("reinitialisations")
@@ -241,17 +246,21 @@ class Tracker:
         cost = unexplained(energy, x)
         recovered = False
         recent = state.recent_costs(s.judge.window)
-        reason = loss_reason(cost, recent, s) if self.method != "ep" else None
+        off, misses = proposal_check(self, frame, x, state.proposal_misses)
+        reason = found = loss_reason(cost, recent, s, misses) if self.method != "ep" else None
         if reason is not None:
-            recovered, x, cost = recover(self, energy, frame, x_prev, x, cost)
+            recovered, x, cost = recover(self, energy, frame, x_prev, x, cost, reason)
             if recovered:
-                reason = loss_reason(cost, recent, s)
-        changes, flags = judge_frame(state, cost, reason, s)
+                off, misses = proposal_check(self, frame, x, 0)
+                reason = loss_reason(cost, recent, s, misses)
+        changes, flags = judge_frame(state, cost, reason, s, found)
         velocity = (np.zeros(self.body.dof) if recovered or turned
                     else pose_velocity(x_prev, x))
         state = state.logged({"energy": e, "cost": cost, "accepted": accepted,
-                              "recovered": recovered, "turned": turned, **flags},
-                             pose=x, velocity=velocity, absent=absent, **changes)
+                              "recovered": recovered, "turned": turned, "disagreement": off,
+                              **flags},
+                             pose=x, velocity=velocity, absent=absent, proposal_misses=misses,
+                             **changes)
         return state, x.copy()
 
     def _recheck_heading(self, state, energy, frame, x):

@@ -1,0 +1,124 @@
+"""Stage "propose": the part recogniser's joint proposals, and what the tracker does with them.
+
+The per-pixel recogniser (:mod:`depthtrack.detect.recognizer`, after Shotton et al. 2011)
+proposes up to three 3D positions per joint from the frame alone, with no previous pose.
+Its sides are unreliable (left and right at about chance: a depth image hardly tells front
+from back), its trunk joints are good (head, neck, pelvis and the shoulders within 10 cm
+most of the time, whatever the body's orientation). So the tracker uses them side-free:
+
+* **Start** (:func:`proposal_candidates`): poses fitted to the proposals, with the sides as
+  labelled and exchanged, join the global search's candidates -- a start in any orientation
+  (lying, upside down), confirmed by the likelihood.
+* **Judge** (:func:`disagreement`): the share of the confident trunk proposals that no
+  joint of the pose comes near. A track whose silhouette still fits but whose body is upside
+  down, or turned into the wrong limb arrangement, explains the depth about as well as the
+  right one; the proposals disagree with it, frame after frame.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..contract import JOINT_INDEX, JOINT_NAMES
+from ..motion.retarget import best_rotation
+from ..rotations import matrix_to_rotvec
+from .heading import SIDES_SWAPPED, fit_joints
+
+#: Joints the judge checks: the recogniser finds them reliably, side-free.
+TRUNK = ("head", "neck", "pelvis", "l_shoulder", "r_shoulder")
+TRUNK_INDEX = np.array([JOINT_INDEX[n] for n in TRUNK])
+#: Joints that fix the root of a pose fitted to proposals (Kabsch).
+ROOT_JOINTS = np.array([JOINT_INDEX[n] for n in ("head", "neck", "pelvis", "l_shoulder",
+                                                 "r_shoulder", "l_hip", "r_hip")])
+
+
+def frame_proposals(tracker, frame):
+    """The recogniser's :class:`~depthtrack.detect.recognizer.JointProposals` for ``frame``
+    (computed once, then kept on it); None when the tracker runs without the recogniser."""
+    if tracker.forest is None:
+        return None
+    if frame.proposals is None:
+        from ..detect.recognizer import joint_proposals, recognize
+
+        with tracker.recorder.timed("propose"):
+            _, probs = recognize(frame.depth, frame.foreground.mask, tracker.camera,
+                                 forest=tracker.forest)
+            frame.proposals = joint_proposals(frame.depth, probs, tracker.camera,
+                                              forest=tracker.forest)
+    return frame.proposals
+
+
+def confident(proposals, min_confidence: float):
+    """``(positions (15, k, 3), usable (15, k) bool)``: proposals at least ``min_confidence``."""
+    pos = np.asarray(proposals.positions, dtype=np.float64)
+    ok = (np.asarray(proposals.confidence) >= min_confidence) & np.all(np.isfinite(pos), axis=2)
+    return pos, ok
+
+
+def disagreement(joints, proposals, min_confidence: float, distance: float,
+                 joint_ids=TRUNK_INDEX):
+    """How far a pose's joints are from the frame's proposals, side-free.
+
+    Parameters
+    ----------
+    joints : (N, 15, 3) or (15, 3) float
+        The poses' contract joints.
+    proposals : JointProposals
+        A left joint's proposals hold its right twin's modes too (``merge_sides``), so the
+        nearest of them matches the joint whichever side the recogniser gave it.
+    min_confidence, distance : float
+        Proposals below ``min_confidence`` are ignored; a joint farther than ``distance`` (m)
+        from every usable proposal of its own disagrees.
+
+    Returns
+    -------
+    fraction : (N,) or () float
+        Share of the checked joints with a usable proposal that disagree (0 when none has one).
+    checked : int
+        Joints with a usable proposal.
+    """
+    J = np.asarray(joints, dtype=np.float64)
+    single = J.ndim == 2
+    J = J[None] if single else J
+    pos, ok = confident(proposals, min_confidence)
+    ids = np.asarray(joint_ids)
+    has = ok[ids].any(axis=1)                                     # (n,)
+    if not has.any():
+        out = np.zeros(len(J))
+        return (out[0] if single else out), 0
+    ids = ids[has]
+    d = np.linalg.norm(J[:, ids, None, :] - pos[ids][None], axis=3)   # (N, n, k)
+    d = np.where(ok[ids][None], d, np.inf).min(axis=2)
+    fraction = np.mean(d > distance, axis=1)
+    return (fraction[0] if single else fraction), int(len(ids))
+
+
+def pose_from_joints(body, target, weights):
+    """A pose ``(48,)`` whose joints match ``target (15, 3)`` where ``weights (15,) > 0``:
+    the root by Kabsch on the trunk joints, then Levenberg-Marquardt on every joint
+    (:func:`~.heading.fit_joints`). None with fewer than three trunk joints known."""
+    w = np.asarray(weights, dtype=np.float64)
+    root = ROOT_JOINTS[w[ROOT_JOINTS] > 0]
+    if len(root) < 3:
+        return None
+    rest = np.asarray(body.joint_positions(np.zeros(body.dof)))
+    R = best_rotation(rest[root] - rest[root].mean(0), target[root] - target[root].mean(0))
+    x0 = np.zeros(body.dof)
+    x0[3:6] = matrix_to_rotvec(R[None])[0]
+    x0[0:3] = target[root].mean(0) - R @ rest[root].mean(0)
+    return fit_joints(body, np.where(w[:, None] > 0, target, 0.0), x0, weights=w)
+
+
+def proposal_candidates(body, proposals, min_confidence: float):
+    """Start candidates from the proposals: ``(K, 48)`` poses fitted to each joint's best
+    proposal, with the sides as the recogniser labelled them and exchanged (K <= 2)."""
+    if proposals is None:
+        return np.zeros((0, body.dof))
+    pos, ok = confident(proposals, min_confidence)
+    target = np.where(ok[:, :1], pos[:, 0], 0.0)                        # (15, 3)
+    weights = ok[:, 0].astype(np.float64)
+    out = []
+    for order in (np.arange(len(JOINT_NAMES)), np.asarray(SIDES_SWAPPED)):
+        x = pose_from_joints(body, target[order], weights[order])
+        if x is not None:
+            out.append(x)
+    return np.array(out).reshape(-1, body.dof)
