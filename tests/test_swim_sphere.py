@@ -117,3 +117,4 @@ def test_gap_predictions_use_only_the_state_before_each_gap():
     later[40:] -= 0.2
     np.testing.assert_array_equal(gap_predictions(sphere_transition(model, 0.8), later, mask, est)[mask[1:]],
                                   out[mask[1:]])
+
