@@ -130,7 +130,8 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
 def _predict_gaps(out: dict, states: dict, model: CyclicMotionModel, z, gap_prediction: str, rho) -> dict:
     """With withheld frames in ``z`` and ``gap_prediction="sphere"``, each of ``out["estimates"]`` inside the
     gaps becomes the roll-out on the sphere (:func:`depthtrack.swim.sphere.gap_predictions`) of its
-    ``states (T + 1, 2A + 2)`` (frames 0 .. T)."""
+    ``states (T + 1, 2A + 2)`` (frames 0 .. T). A per-angle decay ``rho`` is averaged: the sphere's step
+    moves each segment's direction as a whole."""
     if gap_prediction not in GAP_PREDICTIONS:
         raise InputError(None, f"unknown gap prediction {gap_prediction!r} ({', '.join(GAP_PREDICTIONS)})")
     mask = ~np.all(np.isfinite(np.asarray(z, dtype=float)), axis=1)
