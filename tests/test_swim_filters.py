@@ -185,3 +185,51 @@ def test_gap_diagnosis_splits_the_error_into_model_and_filter_state():
     assert m["true state"] < 0.2 * m["filter state"]
     assert m["filter state"] < out["by_position"]["constant_velocity"][-1]
     assert len(out["by_position"]["ukf-tuned"]) == 10 and out["gaps"][0] == [20, 30]
+
+
+def test_leave_one_cycle_out_residuals_are_n_over_n_minus_1_of_the_in_sample_ones():
+    """Closed form: three cycles that differ only in the amplitude e_k of one sinusoid. Under the model of all
+    three a cycle's residual is proportional to e_k - mean(e); under the model of the other two to
+    e_k - mean of the others = 3/2 (e_k - mean(e)). So the leave-one-out residuals are 1.5 times the
+    in-sample ones, angles and velocities alike."""
+    from depthtrack.swim.cycles import TrainingCycles
+    from depthtrack.swim.training import train_motion_model
+    from depthtrack.swim.tuning import loo_residuals, one_step_residuals
+
+    m, eps = 12, np.array([0.1, -0.05, 0.2])
+
+    def pose(s, e):
+        s = np.asarray(s, float)[..., None]
+        return 1.5 + 0.3 * np.sin(2 * np.pi * s + 0.3 * np.arange(A)) + e * np.sin(2 * np.pi * s)
+
+    frames = np.arange(3 * L + 1)
+    take = pose(frames / L, eps[np.minimum(frames // L, 2)][:, None])     # one frame per reference sample
+    cycles = TrainingCycles(np.stack([pose((np.arange(L + 2 * m) - m) / L, e) for e in eps]), m,
+                            [(j * L, (j + 1) * L, "right") for j in range(3)])
+    model = train_motion_model(cycles)
+    inside = np.concatenate([one_step_residuals(model, take, [j * L, (j + 1) * L], 1) for j in range(3)])
+    loo = loo_residuals(cycles, take, "right", 1)
+    assert loo.shape == inside.shape
+    for part in (slice(0, A), slice(A, 2 * A)):
+        ratio = np.sqrt(np.mean(loo[:, part] ** 2) / np.mean(inside[:, part] ** 2))
+        assert abs(ratio - 1.5) < 0.02
+
+
+def test_rbpf_cycle_mean_is_the_weighted_mean_across_the_cycle_wrap():
+    """Particles either side of the cycle's end (one at 0.98, three at 0.02): the mean phase is 0.01, not 0.26
+    (the linear mean of the wrapped numbers), read after the particles have moved on by a frame."""
+    from depthtrack.filters.rbpf import CycleRBPF
+    model, _, Q = _model_and_window()
+    phase = np.array([0.98, 0.02, 0.02, 0.02])
+    speed = np.array([0.010, 0.012, 0.012, 0.012])
+    f = CycleRBPF(model.mean_acceleration, Q, 0.05 ** 2, np.zeros(2 * A), 1e-4 * np.eye(2 * A), phase, speed,
+                  rng=np.random.default_rng(0))
+    f.step(None)                                   # equal weights: predicts, moves every particle by its speed
+    f.log_w = np.log(np.array([0.25, 0.25, 0.25, 0.25], np.float32))
+    c, v = f.cycle_mean()
+    assert v == pytest.approx(0.0115, abs=1e-6)
+    assert c == pytest.approx((-0.02 + 3 * 0.02) / 4, abs=1e-5)          # 0.98 is -0.02 across the wrap
+    f.log_w = np.log(np.array([0.7, 0.1, 0.1, 0.1], np.float32))
+    c, v = f.cycle_mean()
+    assert v == pytest.approx(0.7 * 0.010 + 0.3 * 0.012, abs=1e-6)
+    assert c == pytest.approx((0.7 * -0.02 + 0.3 * 0.02) % 1.0, abs=1e-5)     # 0.992

@@ -15,6 +15,7 @@ _EPILOG = """examples:
   depthtrack swim evaluate --train T.bvh --test T.bvh --filter rbpf,ukf-tuned,smoother --particles 100000 \\
       --noise 0.1 --gaps 10,30
   depthtrack swim evaluate --train T.bvh --test T.bvh --test-start 566 --filter rbpf,ukf-tuned --particles 100000
+  depthtrack swim evaluate --train T.bvh --test T.bvh --filter rbpf,ukf-tuned --process-noise loo --gaps 10
   depthtrack swim train T.bvh -o model.json
   depthtrack swim derivatives T.bvh --report deriv
   depthtrack swim reconstruct markings.csv --lengths lengths.json -o joints.csv"""
@@ -121,6 +122,10 @@ def register(subparsers) -> None:
                         "test frame 20) and report the errors inside and after the gaps, per stroke phase, "
                         "against holding the last measurement, constant-velocity extrapolation and linear "
                         "interpolation (e.g. 10,30)")
+    e.add_argument("--process-noise", choices=("training", "loo"), default="training",
+                   help="process noise of rbpf, ukf-tuned and smoother: the model's one-step residuals on the "
+                        "training cycles (training, the default) or on each training cycle under a model "
+                        "trained without it (loo: leave one cycle out; larger, as on unseen frames)")
     e.add_argument("--test-start", type=integer(0, 10**9), default=None, metavar="FRAME",
                    help="first frame of the test window in the test take (default: the latest cycle start "
                         "that leaves room); with the same take, training skips the cycles overlapping it")
@@ -211,7 +216,7 @@ def run_evaluate(args) -> int:
     setup = prepare(args.train, args.test, frames=args.frames, step=args.step, length=args.length,
                     smooth_sigma=args.smooth, derivative=args.derivative, temporal_sigma=args.temporal_sigma,
                     train_starts=starts, units=args.units, test_start=args.test_start, stroke=args.stroke,
-                    joint_map=args.joint_map)
+                    joint_map=args.joint_map, process_noise=args.process_noise)
     setup.model.jitter = args.jitter
     log = None if (args.quiet or args.json) else (lambda text: print(text, file=sys.stderr))
     metrics, snapshot = run_evaluation(setup, particles, sigmas, estimators, inits, filters, random_sigmas,

@@ -7,7 +7,10 @@
   schedule of :func:`depthtrack.swim.gaps.gap_mask`; the filters predict through
   the gaps; errors inside and after the gaps, overall and per quarter of the
   stroke cycle, for the filters and the baselines (hold, constant velocity,
-  linear interpolation).
+  linear interpolation). Inside the gaps ``rbpf`` and ``ukf-tuned`` predict on
+  the sphere of segment directions (:mod:`depthtrack.swim.sphere`);
+  ``rbpf-angles`` and ``ukf-tuned-angles`` are the same runs' own predictions
+  in angles (the model before), for comparison.
 """
 from __future__ import annotations
 
@@ -94,18 +97,21 @@ def gap_experiment(setup: SwimSetup, z, lengths, filters=("ukf", "rbpf", "ukf-tu
             r = run_rbpf(model, window, zg, particles, setup.process_q, r_sigma, "truth", seed,
                          gap_rho=setup.velocity_decay)
             methods["rbpf"] = errors(r["estimates"]["mean"])
+            methods["rbpf-angles"] = errors(r.get("filter_estimates", r["estimates"])["mean"])
         if ("ukf-tuned" in filters or "smoother" in filters) and setup.process_q is not None:
             r = run_ukf_tuned(model, window, zg, setup.process_q, r_sigma, "truth", seed, gap_rho=setup.velocity_decay)
             methods["ukf-tuned"] = errors(r["estimates"]["mean"])
+            methods["ukf-tuned-angles"] = errors(r.get("filter_estimates", r["estimates"])["mean"])
             methods["smoother"] = errors(r["smoothed"]["estimates"]["mean"])
         cv = methods["constant_velocity"]["inside"]
         cv_cm = methods["constant_velocity"]["inside_cm"]
         ratio = {name: (None if not m["inside"] else round(cv / m["inside"], 3))
-                 for name, m in methods.items() if name in ("ukf", "rbpf", "ukf-tuned", "smoother")}
+                 for name, m in methods.items() if name in ("ukf", "rbpf", "ukf-tuned", "smoother", "rbpf-angles",
+                                                                "ukf-tuned-angles")}
         ratio_cm = {name: (None if not m["inside_cm"] else round(cv_cm / m["inside_cm"], 3))
                     for name, m in methods.items() if name in ratio}
         out.append({"length": int(k), "first": first, "spacing": spacing, "after": after, "cv_window": cv_window,
-                    "rbpf_particles": particles, "ukf_sigma": ukf_sigma,
+                    "rbpf_particles": particles, "ukf_sigma": ukf_sigma, "gap_prediction": "sphere",
                     "gaps": [[int(a), int(b)] for a, b in gap_runs(mask)], "methods": methods, "ratio_cv": ratio,
                     "ratio_cv_cm": ratio_cm})
         if log:

@@ -273,6 +273,9 @@ def run_ukf(model: CyclicMotionModel, window: TestWindow, z, sigma: float, init:
     return {"estimates": {"mean": est}, "phase": phase, "speed": speed, "seconds": time.perf_counter() - start}
 
 
+PROCESS_NOISE = ("training", "loo")
+
+
 @dataclass
 class SwimSetup:
     """Everything an evaluation needs: the trained model, the test window, the split."""
@@ -286,18 +289,24 @@ class SwimSetup:
     process_q: np.ndarray | None = None
     residual_count: int = 0
     velocity_decay: float = 1.0
+    process_noise: str = "training"
 
 
 def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int = 100,
             smooth_sigma: float = 2.0, derivative: str = "taylor3", temporal_sigma=None,
             train_starts=None, side: str = "right", units=None, test_start: int | None = None,
-            stroke: str = "back", joint_map=None) -> SwimSetup:
+            stroke: str = "back", joint_map=None, process_noise: str = "training") -> SwimSetup:
     """Load the takes, split, train the model, estimate its process noise and cut the test window.
 
     ``test_start`` (a frame of the test take) places the test window there; with the
     same take for both, training then uses only the cycles that do not overlap it.
+    ``process_noise``: ``training`` (the one-step residuals on the training cycles) or ``loo``
+    (each cycle's residuals under a model trained without it, :func:`depthtrack.swim.tuning.loo_residuals`).
     """
-    from .tuning import process_noise_from_residuals, training_residuals
+    from .tuning import loo_residuals, process_noise_from_residuals, training_residuals
+
+    if process_noise not in PROCESS_NOISE:
+        raise InputError(None, f"unknown process noise estimate {process_noise!r} ({', '.join(PROCESS_NOISE)})")
 
     if frames < 1 or step < 1:
         raise InputError(None, "--frames and --step must be positive")
@@ -328,8 +337,11 @@ def prepare(train_path, test_path, frames: int = 200, step: int = 2, length: int
     train_angles = continue_angles(joints_to_angles(train.joints))
     # filtering: the thesis's model (rho = 1), its noise from one-step residuals; gaps: the decay
     # that predicts 1 to 30 frames ahead best on the training frames
-    _, residuals = training_residuals(model, train_angles, own, step, rho=1.0)
+    if process_noise == "loo":
+        residuals = loo_residuals(training, train_angles, side, step, derivative, temporal_sigma)
+    else:
+        _, residuals = training_residuals(model, train_angles, own, step, rho=1.0)
     rho, _ = training_residuals(model, train_angles, own, step)
     q = process_noise_from_residuals(residuals) if len(residuals) else None
     return SwimSetup(model, window, training.sources, str(train_path), str(test_path), units_note, q,
-                     len(residuals), rho)
+                     len(residuals), rho, process_noise)

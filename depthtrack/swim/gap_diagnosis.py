@@ -5,7 +5,9 @@ UKF (:func:`depthtrack.swim.tracking.run_ukf_tuned`, every frame measured) gives
 its state at the last measured frame; the motion model with the gap's velocity
 decay then predicts the gap's frames from that state, and from the same state
 with the true phase and speed, and also the true angles or the true velocities
-(central differences of the truth), or all of them. The differences split the in-gap error
+(central differences of the truth), or all of them, with the model in angles and (``sphere``
+rows) integrated on the sphere of segment directions (:mod:`depthtrack.swim.sphere`, what the
+filters predict gaps with). The differences split the in-gap error
 into the model's own part and the part of each state component. Also the error
 by position inside the gap, of constant velocity and of the filter run with
 the gap withheld, the error per segment inside the gaps, and how often each
@@ -29,6 +31,7 @@ from .experiment import frame_errors, measurements, prepare
 from .gaps import gap_baselines, gap_mask, gap_runs, withhold
 from .stickfigure import (SEGMENTS, angle_error_sq, continue_angles, equivalent_branch,
                           nearest_equivalent)
+from .sphere import sphere_transition
 from .tracking import decaying_transition, run_ukf_tuned
 from .tuning import estimate_measurement_noise
 
@@ -59,8 +62,9 @@ def diagnose(setup, z, length: int, first: int = 20, spacing: int = 40) -> dict:
     states = run_ukf_tuned(model, window, z, setup.process_q, r_sigma, smooth=False)["states"]   # frames 1..T
     truth = window.angles
     fx = decaying_transition(model, setup.velocity_decay)
+    fx_sphere = sphere_transition(model, setup.velocity_decay)
 
-    def error(starts):
+    def error(starts, fx=fx):
         pred = predict_gaps(fx, starts, runs)
         sq = [np.sum(wrap(nearest_equivalent(p[:, :A], truth[a:b]) - truth[a:b]) ** 2, axis=1)
               for p, (a, b) in zip(pred, runs)]
@@ -82,7 +86,10 @@ def diagnose(setup, z, length: int, first: int = 20, spacing: int = 40) -> dict:
                 "true state": (true_x, true_x, true_x)}
     out = {"length": length, "gaps": [[int(a), int(b)] for a, b in runs], "velocity_decay": setup.velocity_decay,
            "model_from": {name: error(mix(*src)) for name, src in variants.items()}}
-    # error by position in the gap: constant velocity and the filter run with the gaps withheld
+    for name in ("filter state", "true state"):
+        out["model_from"][name + ", sphere"] = error(mix(*variants[name]), fx_sphere)
+    # error by position in the gap: constant velocity and the filter run with the gaps withheld (its
+    # estimates in the gaps: the roll-out on the sphere)
     zg = withhold(z, mask)
     run = run_ukf_tuned(model, window, zg, setup.process_q, estimate_measurement_noise(zg), smooth=False,
                         gap_rho=setup.velocity_decay)

@@ -143,7 +143,10 @@ def run_evaluation(setup: SwimSetup, particles=(100, 1000, 10000, 100000, 100000
         "error_unit": "rad^2 per frame: squared angle error summed over the 26 angles, mean over frames",
         "baseline_measurement": baseline,
         "measurement_noise_estimate": estimate_measurement_noise(z),
-        "process_noise": {"source": "second moment of the model's one-step residuals on the training frames",
+        "process_noise": {"source": "second moment of the model's one-step residuals on the training frames" +
+                          (", each cycle under a model trained without it (leave one cycle out)"
+                           if setup.process_noise == "loo" else ""),
+                          "estimate": setup.process_noise,
                           "residual_frames": setup.residual_count,
                           "velocity_decay": setup.velocity_decay,
                           "rms_angle": None if setup.process_q is None else

@@ -15,6 +15,14 @@ gaps); the filters then only predict with the motion model.
   the per-phase training covariance and a guessed sigma.
 * ``smoother``: the unscented RTS smoother (Särkkä 2008) over the tuned UKF,
   for offline use (it sees the whole window, including frames after a gap).
+
+Inside a withheld stretch the RBPF's and the UKF's estimates are, by default
+(``gap_prediction="sphere"``), the roll-out of their posterior mean at the last
+measured frame with the same model integrated on the sphere of segment
+directions (:mod:`depthtrack.swim.sphere`: a pass near the pole is a straight
+line there, not a spin of the azimuth); ``gap_prediction="filter"`` keeps the
+filter's own prediction in angles. Either way the filter itself predicts in
+angles and picks up after the gap as before.
 """
 from __future__ import annotations
 
@@ -29,7 +37,10 @@ from ..filters.smoother import rts_smooth
 from ..filters.ukf import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from ..motion.cyclic import CyclicMotionModel
 from .experiment import TestWindow, initial_state
+from .sphere import gap_predictions, sphere_transition
 from .stickfigure import nearest_equivalent, zenith_sign
+
+GAP_PREDICTIONS = ("sphere", "filter")
 
 
 def _initial(model: CyclicMotionModel, window: TestWindow, z, init: str, r_sigma: float, rng):
@@ -49,7 +60,8 @@ def _initial(model: CyclicMotionModel, window: TestWindow, z, init: str, r_sigma
 
 
 def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, Q, r_sigma: float,
-             init: str = "truth", seed: int = 0, progress=None, rho: float = 1.0, gap_rho=None) -> dict:
+             init: str = "truth", seed: int = 0, progress=None, rho: float = 1.0, gap_rho=None,
+             gap_prediction: str = "sphere") -> dict:
     """Track the window with :class:`CycleRBPF`.
 
     Parameters
@@ -63,10 +75,16 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
     rho, gap_rho : float
         Velocity decay on measured and on withheld frames (:mod:`depthtrack.swim.tuning`; 1 = the
         thesis's model; ``gap_rho`` defaults to ``rho``).
+    gap_prediction : str
+        ``sphere`` or ``filter``: the estimates inside withheld stretches (module docstring).
 
     Returns
     -------
-    dict with ``estimates`` {"mean", "map"} (T, A), ``phase``, ``speed``, ``ess`` (T,), ``seconds``.
+    dict with ``estimates`` {"mean", "map"} (T, A), ``phase``, ``speed``, ``ess`` (T,), ``seconds``,
+    ``states`` {"mean", "map"} (T + 1, 2A + 2) posterior mean / best particle's state of frames 0 .. T
+    (the mean's phase and speed are the posterior mean's at the last frame before a gap, elsewhere the
+    best particle's), and with withheld frames ``filter_estimates`` (the
+    filter's own predictions in angles).
     """
     rng = np.random.default_rng(seed)
     A = model.n_angles
@@ -85,6 +103,8 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
     T = window.frames
     est = {"mean": np.empty((T, A)), "map": np.empty((T, A))}
     out_phase, out_speed, ess = np.empty(T), np.empty(T), np.empty(T)
+    states = {k: np.empty((T + 1, model.dim)) for k in est}
+    states["mean"][0] = states["map"][0] = np.concatenate([x0, [c0, s0]])
     previous = x0[:A]
     start = time.perf_counter()
     for t in range(1, T + 1):
@@ -93,11 +113,35 @@ def run_rbpf(model: CyclicMotionModel, window: TestWindow, z, n_particles: int, 
         est["mean"][t - 1] = f.mean_x[:A]
         est["map"][t - 1] = f.map_x[:A]
         out_phase[t - 1], out_speed[t - 1], ess[t - 1] = f.map_phase, f.map_speed, f.ess
+        states["mean"][t, :2 * A], states["map"][t, :2 * A] = f.mean_x, f.map_x
+        states["map"][t, 2 * A:] = f.map_phase, f.map_speed
+        # the mean state's cycle part: the posterior mean, needed only where a gap starts next frame
+        gap_next = t < T and not np.all(np.isfinite(z[t + 1])) and zt is not None
+        states["mean"][t, 2 * A:] = f.cycle_mean() if gap_next else (f.map_phase, f.map_speed)
         previous = f.mean_x[:A]
         if progress is not None:
             progress.update(1)
-    return {"estimates": est, "phase": out_phase, "speed": out_speed, "ess": ess,
-            "seconds": time.perf_counter() - start}
+    seconds = time.perf_counter() - start
+    out = {"estimates": est, "phase": out_phase, "speed": out_speed, "ess": ess, "seconds": seconds,
+           "states": states}
+    return _predict_gaps(out, states, model, z, gap_prediction, rho if gap_rho is None else gap_rho)
+
+
+def _predict_gaps(out: dict, states: dict, model: CyclicMotionModel, z, gap_prediction: str, rho) -> dict:
+    """With withheld frames in ``z`` and ``gap_prediction="sphere"``, each of ``out["estimates"]`` inside the
+    gaps becomes the roll-out on the sphere (:func:`depthtrack.swim.sphere.gap_predictions`) of its
+    ``states (T + 1, 2A + 2)`` (frames 0 .. T). A per-angle decay ``rho`` is averaged: the sphere's step
+    moves each segment's direction as a whole."""
+    if gap_prediction not in GAP_PREDICTIONS:
+        raise InputError(None, f"unknown gap prediction {gap_prediction!r} ({', '.join(GAP_PREDICTIONS)})")
+    mask = ~np.all(np.isfinite(np.asarray(z, dtype=float)), axis=1)
+    mask[0] = False
+    if gap_prediction == "filter" or not mask.any():
+        return out
+    fx = sphere_transition(model, float(np.mean(rho)))
+    out["filter_estimates"] = out["estimates"]
+    out["estimates"] = {k: gap_predictions(fx, states[k], mask, e) for k, e in out["estimates"].items()}
+    return out
 
 
 def decaying_transition(model: CyclicMotionModel, rho: float):
@@ -125,13 +169,18 @@ def decaying_transition(model: CyclicMotionModel, rho: float):
 
 
 def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: float, init: str = "truth",
-                  seed: int = 0, smooth: bool = True, rho: float = 1.0, gap_rho=None) -> dict:
+                  seed: int = 0, smooth: bool = True, rho: float = 1.0, gap_rho=None,
+                  gap_prediction: str = "sphere") -> dict:
     """The UKF with the estimated noise, and (``smooth``) the unscented RTS smoother over it.
+
+    ``gap_prediction``: ``sphere`` or ``filter``, the estimates inside withheld stretches (module
+    docstring; the smoother is not affected).
 
     Returns
     -------
-    dict with ``estimates`` {"mean"}, ``phase``, ``speed``, ``seconds`` and, with ``smooth``,
-    ``smoothed`` (a dict of the same form for the smoother).
+    dict with ``estimates`` {"mean"}, ``phase``, ``speed``, ``seconds``, ``states`` (T, 2A + 2) of frames
+    1 .. T, with withheld frames ``filter_estimates`` (the filter's own predictions in angles) and, with
+    ``smooth``, ``smoothed`` (a dict of the same form for the smoother).
     """
     A, D = model.n_angles, model.dim
     rng = np.random.default_rng(seed)
@@ -187,4 +236,4 @@ def run_ukf_tuned(model: CyclicMotionModel, window: TestWindow, z, Q, r_sigma: f
         xs_s, _ = rts_smooth(xs, Ps, xp, Pp, Cs, residual=model.state_residual)
         out["smoothed"] = {"estimates": {"mean": xs_s[1:, :A]}, "phase": np.mod(xs_s[1:, 2 * A], 1.0),
                            "speed": xs_s[1:, 2 * A + 1], "seconds": seconds + time.perf_counter() - start}
-    return out
+    return _predict_gaps(out, {"mean": xs}, model, z, gap_prediction, rho if gap_rho is None else gap_rho)

@@ -10,7 +10,14 @@ from the measurements.
   training cycle starts). Velocities are central differences of the angles;
   the residual of frame t is ``x_{t+1} - F x_t - u(c_t, v_t)`` and ``Q`` its
   second moment (bias included: the model's mean error is noise to the
-  filter too).
+  filter too). In-sample residuals are too small for a frame the model was
+  not trained on (the mean stroke was fitted to the very cycles it is
+  scored on: with n cycles, a cycle's deviation from a mean that includes it
+  is (n - 1) / n of its deviation from the true mean), so
+  ``process_noise="loo"`` (:func:`loo_residuals`) scores each training
+  cycle with a model trained on the cycles that do not overlap it (leave one
+  cycle out, the cross-validation estimate of prediction error; Hastie,
+  Tibshirani & Friedman, *Elements of Statistical Learning*, 7.10).
 * Measurement noise ``sigma^2`` per angle: from the measurements alone, by
   the third difference. For white noise, ``Var(Delta^3 z) = 20 sigma^2``
   (binomial coefficients 1, 3, 3, 1 squared and summed); the swimmer's own
@@ -150,6 +157,42 @@ def training_residuals(model: CyclicMotionModel, angles, cycles, step: int = 1, 
         rho = fit_velocity_decay([_training_frames(model, angles, st, step) for st in runs], horizon)
     out = [one_step_residuals(model, angles, st, step, rho=rho) for st in runs]
     return rho, (np.concatenate(out) if out else np.zeros((0, 2 * model.n_angles)))
+
+
+def loo_residuals(training, angles, side: str, step: int = 1, derivative: str = "taylor3",
+                  temporal_sigma=None, rho: float = 1.0):
+    """One-step residuals of each ``side`` training cycle under a model trained without it.
+
+    Parameters
+    ----------
+    training : depthtrack.swim.cycles.TrainingCycles
+        All training cycles (both sides); for cycle ``(first, end, side)`` the model is trained on the
+        cycles whose frames do not overlap ``[first, end)`` (the other arm's mirrored cycles of the same
+        frames are left out too). Cycles with fewer than one such other cycle are skipped.
+    angles : (F, A) float
+        Continuous angles of every frame of the training take.
+    side, step, derivative, temporal_sigma, rho
+        As for :func:`one_step_residuals` and :func:`depthtrack.swim.training.train_motion_model`.
+
+    Returns
+    -------
+    (M, 2A) float residuals (M may be 0).
+    """
+    from .cycles import TrainingCycles
+    from .training import train_motion_model
+
+    sources = training.sources
+    out = [np.zeros((0, 2 * angles.shape[1]))]
+    for first, end, sd in sources:
+        if sd != side:
+            continue
+        keep = [i for i, (a, b, _) in enumerate(sources) if b <= first or a >= end]
+        if not keep:
+            continue
+        rest = TrainingCycles(training.extended[keep], training.margin, [sources[i] for i in keep])
+        model = train_motion_model(rest, derivative, temporal_sigma=temporal_sigma)
+        out.append(one_step_residuals(model, angles, [first, end], step, rho=rho))
+    return np.concatenate(out)
 
 
 def process_noise_from_residuals(residuals, floor: float = 1e-8):
