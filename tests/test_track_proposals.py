@@ -1,0 +1,117 @@
+"""The part recogniser in the tracker (issue 10): side-free disagreement, poses fitted to
+proposals, and an upside-down track put right by the proposals' judgement."""
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+from depthtrack.body.skeleton import POSE_INDEX
+from depthtrack.contract import JOINT_INDEX
+from depthtrack.detect.recognizer import JointProposals
+from depthtrack.io import open_sequence
+from depthtrack.synth.generate import synthesize_procedural
+from depthtrack.track import TrackerSettings
+from depthtrack.track.heading import SIDES_SWAPPED
+from depthtrack.track.proposals import TRUNK, disagreement, proposal_candidates
+from depthtrack.track.tracker import Tracker, fit_pose_to_joints
+
+
+def _proposals(joints, confidence=0.01):
+    """Perfect proposals: each joint's own position first, its twin's second (merge_sides)."""
+    joints = np.asarray(joints, dtype=np.float64)
+    pos = np.stack([joints, joints[SIDES_SWAPPED]], axis=1)          # (15, 2, 3)
+    return JointProposals(pos, np.full((15, 2), confidence))
+
+
+def _pose():
+    x = np.zeros(48)
+    x[2] = 3.0
+    x[POSE_INDEX["l_hip_rx"]] = -0.6
+    x[POSE_INDEX["r_shoulder_rz"]] = 1.0
+    return x
+
+
+def test_disagreement_is_side_free_and_counts_far_trunk_joints():
+    body = BodyModel.default(height=1.75)
+    joints = np.asarray(body.joint_positions(_pose()))
+    props = _proposals(joints)
+    off, checked = disagreement(joints, props, 0.002, 0.3)
+    assert checked == len(TRUNK) and off == 0.0
+    # the sides exchanged: still no disagreement (the recogniser's sides are not trusted)
+    off, _ = disagreement(joints[SIDES_SWAPPED], props, 0.002, 0.3)
+    assert off == 0.0
+    # the head and neck 0.5 m away: 2 of the 5 trunk joints disagree
+    moved = joints.copy()
+    moved[[JOINT_INDEX["head"], JOINT_INDEX["neck"]]] += [0.0, 0.5, 0.0]
+    off, _ = disagreement(np.stack([joints, moved]), props, 0.002, 0.3)
+    assert off.tolist() == [0.0, pytest.approx(0.4)]
+    # proposals below the confidence floor are not evidence at all
+    off, checked = disagreement(moved, _proposals(joints, 0.001), 0.002, 0.3)
+    assert checked == 0 and off == 0.0
+
+
+def test_poses_fitted_to_proposals_put_the_joints_there():
+    body = BodyModel.default(height=1.75)
+    x = _pose()
+    R = rotation_about(np.array([1.0, 0.0, 0.0]), 2.2)         # lying, head away from the camera
+    x[3:6] = matrix_to_rotvec(R[None])[0]
+    joints = np.asarray(body.joint_positions(x))
+    fits = proposal_candidates(body, _proposals(joints), 0.002)
+    assert fits.shape == (2, 48)
+    got = np.asarray(body.joint_positions(fits))
+    assert np.linalg.norm(got[0] - joints, axis=1).max() < 0.03
+    assert np.linalg.norm(got[1] - joints[SIDES_SWAPPED], axis=1).max() < 0.05
+    # the root follows: the fitted body lies as the true one does
+    up = rotvec_to_matrix(fits[0, 3:6]) @ np.array([0.0, 1.0, 0.0])
+    assert up @ (R @ np.array([0.0, 1.0, 0.0])) > 0.95
+
+
+@pytest.fixture(scope="module")
+def squat(tmp_path_factory):
+    """15 frames of a half squat (SR4000, ToF noise)."""
+    d = tmp_path_factory.mktemp("squat") / "seq"
+    synthesize_procedural("squat", d, start=0.6, seconds=0.6, seed=3)
+    return open_sequence(d)
+
+
+def test_an_upside_down_track_is_put_right_by_the_proposals(squat):
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x0 = fit_pose_to_joints(body, truth[0])
+    R = rotvec_to_matrix(x0[3:6])
+    flipped = x0.copy()                              # head down, turned about the pelvis
+    flipped[3:6] = matrix_to_rotvec((rotation_about(np.array([0.0, 0.0, 1.0]), np.pi) @ R)[None])[0]
+    with Tracker(body, squat.camera, settings=TrackerSettings()) as tracker:
+        tracker.init(squat.depth(0), pose=flipped)
+        joints = [body.joint_positions(tracker.pose)]
+        for i in range(1, len(squat)):
+            joints.append(body.joint_positions(tracker.step(squat.depth(i))))
+        info = tracker.describe()
+    err = np.linalg.norm(np.asarray(joints) - truth, axis=-1).mean(axis=-1)
+    assert err[0] > 0.5
+    reasons = [r["reason"] for r in info["recoveries"]]
+    assert "proposals" in reasons, info["recoveries"]
+    first = next(r for r in info["recoveries"] if r["reason"] == "proposals")
+    # judged after ProposalSettings.lost_frames frames in a row, then back within 5 frames
+    assert first["frame"] <= TrackerSettings().propose.lost_frames + 1
+    back = first["frame"] + first["frames_to_recover"]
+    assert err[back:].max() < 0.1 and back <= first["frame"] + 5
+
+
+def test_settings_validate_and_turn_the_recogniser_off():
+    from depthtrack.errors import InputError
+    from depthtrack.track.settings import ProposalSettings
+
+    with pytest.raises(InputError):
+        ProposalSettings(enabled="yes")
+    with pytest.raises(InputError):
+        ProposalSettings(lost_frames=0)
+    body = BodyModel.default(height=1.75)
+    from depthtrack.camera import Camera
+
+    cam = Camera.preset("sr4000")
+    off = TrackerSettings(propose=ProposalSettings(enabled=False))
+    with Tracker(body, cam, settings=off) as a, Tracker(body, cam) as b, \
+            Tracker(body, cam, method="hc") as c:
+        assert a.forest is None and b.forest is not None and c.forest is None
+    assert TrackerSettings().to_dict()["propose"]["lost_frames"] == 3
