@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench benchmark benchmark-quick sysdeps clean
+.PHONY: demo test bench benchmark benchmark-wide benchmark-quick sysdeps clean
 
 $(STAMP): pyproject.toml
 	@$(MAKE) --no-print-directory sysdeps
@@ -35,10 +35,15 @@ bench: $(STAMP)
 
 # Synthetic ToF sequences from ../shared/data, all three trackers, and the likelihood comparison.
 # The held-out benchmark (tools/benchmark.py): the dev split (tune on it) and the test
-# split (report only), separately; benchmark-quick is the few-minute preset.
+# split (report only), separately; benchmark-wide is every motion under one condition each
+# (about 40 minutes per split), benchmark-quick the few-minute preset.
 benchmark: $(STAMP)
 	$(PY) tools/benchmark.py --split dev --out benchmark-output
 	$(PY) tools/benchmark.py --split test --out benchmark-output
+
+benchmark-wide: $(STAMP)
+	$(PY) tools/benchmark.py --split dev --wide --out benchmark-output
+	$(PY) tools/benchmark.py --split test --wide --out benchmark-output
 
 benchmark-quick: $(STAMP)
 	$(PY) tools/benchmark.py --split dev --quick --out benchmark-output

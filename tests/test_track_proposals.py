@@ -11,7 +11,7 @@ from depthtrack.detect.recognizer import JointProposals
 from depthtrack.io import open_sequence
 from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import SIDES_SWAPPED
+from depthtrack.track.heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED
 from depthtrack.track.proposals import TRUNK, disagreement, proposal_candidates
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
@@ -57,10 +57,17 @@ def test_poses_fitted_to_proposals_put_the_joints_there():
     x[3:6] = matrix_to_rotvec(R[None])[0]
     joints = np.asarray(body.joint_positions(x))
     fits = proposal_candidates(body, _proposals(joints), 0.002)
-    assert fits.shape == (2, 48)
+    assert fits.shape == (4, 48)                 # as labelled, all, legs, arms exchanged
     got = np.asarray(body.joint_positions(fits))
     assert np.linalg.norm(got[0] - joints, axis=1).max() < 0.03
     assert np.linalg.norm(got[1] - joints[SIDES_SWAPPED], axis=1).max() < 0.05
+    assert np.linalg.norm(got[2] - joints[LEGS_SWAPPED], axis=1).max() < 0.05
+    # the legs exchanged, the trunk stays where the proposals put it (arms exchanged
+    # across the body cannot reach: that fit is only nearer than the unexchanged one)
+    trunk = [JOINT_INDEX[n] for n in ("head", "neck", "pelvis")]
+    assert np.linalg.norm(got[:3, trunk] - joints[trunk], axis=2).max() < 0.02
+    assert np.linalg.norm(got[3] - joints[ARMS_SWAPPED], axis=1).mean() < \
+        np.linalg.norm(got[0] - joints[ARMS_SWAPPED], axis=1).mean()
     # the root follows: the fitted body lies as the true one does
     up = rotvec_to_matrix(fits[0, 3:6]) @ np.array([0.0, 1.0, 0.0])
     assert up @ (R @ np.array([0.0, 1.0, 0.0])) > 0.95

@@ -3,8 +3,8 @@
 
 Usage::
 
-    .venv/bin/python tools/benchmark.py --split dev  [--quick] [--out benchmark-output]
-    .venv/bin/python tools/benchmark.py --split test [--quick]
+    .venv/bin/python tools/benchmark.py --split dev  [--quick | --wide] [--out benchmark-output]
+    .venv/bin/python tools/benchmark.py --split test [--quick | --wide]
 
 For every motion of the split (the mocap clips of ``depthtrack/data/motion_split.json``
 under ``--data``, and the procedural motions of
@@ -17,7 +17,9 @@ and condition the mean and spread (standard deviation) over the seeds, and overa
 mean over motion-condition groups, each weighing the same, and its spread over the seeds),
 with every command line that made them.
 
-Presets: ``--quick`` takes three motions of the split (two mocap clips and one procedural
+Presets: ``--wide`` takes every motion of the split, each under one of the quick
+preset's three conditions in turn, three seeds, 2 s clips, ``hc+ep``: every motion seen,
+in about 40 minutes per split on two idle cores. ``--quick`` takes three motions of the split (two mocap clips and one procedural
 motion), one condition each (SR4000 from the front, Kinect v2 from 120 degrees, Azure
 NFOV from 240 degrees), three seeds, 2 s clips and ``hc+ep`` only: a few minutes on two
 cores. The full preset (default) takes every motion of the split under six conditions
@@ -65,6 +67,7 @@ CONDITIONS_QUICK = [
 PRESETS = {
     "full": {"seconds": 4.0, "seeds": 3, "methods": "hc+ep,hc", "clips": None},
     "quick": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep", "clips": 3},
+    "wide": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep", "clips": None},
 }
 METRICS = ("within_10cm", "mean_error_m", "max_error_m", "marker_mean_error_m", "fps")
 
@@ -249,6 +252,8 @@ def main(argv=None) -> int:
                                             "  tools/benchmark.py --split test --out benchmark-output")
     parser.add_argument("--split", default="test", help="dev or test (or train) (default test)")
     parser.add_argument("--quick", action="store_true", help="the quick preset (minutes; see above)")
+    parser.add_argument("--wide", action="store_true",
+                        help="every motion of the split, one condition each (see above)")
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data"),
                         help="where the split's mocap clips are (default ../shared/data)")
     parser.add_argument("--out", default="benchmark-output", help="output folder (default benchmark-output)")
@@ -256,9 +261,15 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=None, help="noise seeds per condition (preset 3)")
     parser.add_argument("--methods", default=None, help="tracking methods (preset hc+ep,hc; quick hc+ep)")
     parser.add_argument("--motions", default=None, help="comma-separated motion names of the split to run")
+    parser.add_argument("--keep-tracks", action="store_true",
+                        help="also keep every track (OUT/SPLIT/tracks/SEQUENCE/METHOD/), to look at the failures")
     args = parser.parse_args(argv)
 
-    preset_name = "quick" if args.quick else "full"
+    if args.quick and args.wide:
+        print("benchmark: choose --quick or --wide, not both", file=sys.stderr)
+        return 2
+    preset_name = "quick" if args.quick else "wide" if args.wide else "full"
+    one_each = args.quick or args.wide
     preset = dict(PRESETS[preset_name])
     seconds = args.seconds or preset["seconds"]
     n_seeds = args.seeds or preset["seeds"]
@@ -277,7 +288,7 @@ def main(argv=None) -> int:
         motions = [m for m in motions if m[0] in wanted]
     elif preset["clips"]:
         motions = quick_subset(motions, preset["clips"])
-    conditions = CONDITIONS_QUICK if args.quick else CONDITIONS_FULL
+    conditions = CONDITIONS_QUICK if one_each else CONDITIONS_FULL
     out = Path(args.out).resolve() / args.split
     seq_dir = out / "sequences"
     seeds = list(range(1, n_seeds + 1))
@@ -287,8 +298,8 @@ def main(argv=None) -> int:
     plan = []
     for i, (name, kind, source) in enumerate(motions):
         start = busiest_window(kind, source, seconds)
-        # quick: one condition per motion, in turn; full: every condition
-        conds = [conditions[i % len(conditions)]] if args.quick else conditions
+        # quick and wide: one condition per motion, in turn; full: every condition
+        conds = [conditions[i % len(conditions)]] if one_each else conditions
         plan.append((name, kind, source, start, conds))
     total = sum(len(p[4]) for p in plan) * len(seeds)
     sequences, done = [], 0
@@ -304,6 +315,8 @@ def main(argv=None) -> int:
                 group.append((seq_name, path, synth, seed, s_index))
             evaluate = ["depthtrack", "eval", *[shown(g[1]) for g in group], "--methods", ",".join(methods),
                         "--json", "--quiet"]
+            if args.keep_tracks:
+                evaluate += ["--tracks-out", shown(out / "tracks"), "--force"]
             result = json.loads(run_depthtrack(evaluate))["sequences"]
             for seq_name, path, synth, seed, s_index in group:
                 metrics = {m: result[seq_name][m] for m in methods}

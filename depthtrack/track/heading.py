@@ -41,6 +41,19 @@ SIDES_SWAPPED = [JOINT_INDEX[n.replace("l_", "#").replace("r_", "l_").replace("#
                  for n in JOINT_NAMES]
 
 
+def _sides_swapped_for(kinds):
+    """Contract joint order with left and right exchanged for the joints of ``kinds``
+    (names without their ``l_`` / ``r_``)."""
+    return [SIDES_SWAPPED[j] if name[2:] in kinds else j for j, name in enumerate(JOINT_NAMES)]
+
+
+#: Joint orders with only the legs' / only the arms' sides exchanged (the recogniser's
+#: sides are at chance: :func:`~.proposals.proposal_candidates` tries each); the hips and
+#: shoulders stay, being rigid with the trunk.
+LEGS_SWAPPED = _sides_swapped_for(("knee", "ankle"))
+ARMS_SWAPPED = _sides_swapped_for(("elbow", "wrist"))
+
+
 def swapped_twin(body, pose):
     """``pose (48,)``'s twin with the joints left where they are and left and right
     exchanged: the body facing the other way, its limbs where the image put them.

@@ -21,7 +21,7 @@ import numpy as np
 from ..contract import JOINT_INDEX, JOINT_NAMES
 from ..motion.retarget import best_rotation
 from ..rotations import matrix_to_rotvec
-from .heading import SIDES_SWAPPED, fit_joints
+from .heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints
 
 #: Joints the judge checks: the recogniser finds them reliably, side-free.
 TRUNK = ("head", "neck", "pelvis", "l_shoulder", "r_shoulder")
@@ -108,16 +108,22 @@ def pose_from_joints(body, target, weights):
     return fit_joints(body, np.where(w[:, None] > 0, target, 0.0), x0, weights=w)
 
 
+#: The side assignments tried: as labelled, all exchanged, only the legs, only the arms.
+SIDE_ORDERS = (np.arange(len(JOINT_NAMES)), np.asarray(SIDES_SWAPPED), np.asarray(LEGS_SWAPPED),
+               np.asarray(ARMS_SWAPPED))
+
+
 def proposal_candidates(body, proposals, min_confidence: float):
     """Start candidates from the proposals: ``(K, 48)`` poses fitted to each joint's best
-    proposal, with the sides as the recogniser labelled them and exchanged (K <= 2)."""
+    proposal, with the sides as the recogniser labelled them, all exchanged, and only the
+    legs' or only the arms' exchanged (its sides are at chance; K <= 4)."""
     if proposals is None:
         return np.zeros((0, body.dof))
     pos, ok = confident(proposals, min_confidence)
     target = np.where(ok[:, :1], pos[:, 0], 0.0)                        # (15, 3)
     weights = ok[:, 0].astype(np.float64)
     out = []
-    for order in (np.arange(len(JOINT_NAMES)), np.asarray(SIDES_SWAPPED)):
+    for order in SIDE_ORDERS:
         x = pose_from_joints(body, target[order], weights[order])
         if x is not None:
             out.append(x)
