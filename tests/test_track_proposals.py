@@ -113,6 +113,9 @@ def test_settings_validate_and_turn_the_recogniser_off():
         ProposalSettings(enabled="yes")
     with pytest.raises(InputError):
         ProposalSettings(lost_frames=0)
+    from depthtrack.track.settings import HeadingSettings
+    with pytest.raises(InputError):
+        HeadingSettings(start_twin="mirrored")
     body = BodyModel.default(height=1.75)
     from depthtrack.camera import Camera
 

@@ -3,7 +3,8 @@
 A depth image barely tells a body's front from its back, and the start's heading prior
 assumes the person faces the camera. Motion does tell them apart: knees and elbows bend one
 way only. After a start both hypotheses are tracked through the next
-:attr:`HeadingSettings.frames` frames, each from a copy of the start state; the turned one
+:attr:`HeadingSettings.frames` frames, each from a copy of the start state; the other one
+(by default the swapped twin, :func:`swapped_twin`; :attr:`HeadingSettings.start_twin`)
 is kept only when its fit explains the frames clearly better (mean unexplained share lower
 by :attr:`HeadingSettings.margin`).
 

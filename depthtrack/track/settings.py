@@ -316,6 +316,12 @@ class StartSettings:
         object.__setattr__(self, "axial_shifts", tuple(float(s) for s in self.axial_shifts))
 
 
+#: The start check's other hypothesis: the pose turned half a turn about its long axis
+#: (limbs turned with it), or its swapped twin (the joints kept, the sides exchanged, as the
+#: recheck while tracking uses).
+START_TWINS = ("turned", "swapped")
+
+
 @dataclass(frozen=True)
 class HeadingSettings:
     """The front/back check after an automatic start (:mod:`.heading`).
@@ -337,6 +343,11 @@ class HeadingSettings:
     (0 = off). A profile view gives the right heading a steady small lead, below
     ``recheck_margin``; a frontal view, where the twins explain the image equally well,
     gives leads of either sign that the drift cancels.
+
+    ``start_twin``: the start check's other hypothesis (:data:`START_TWINS`), by default the
+    swapped twin, as the recheck's: a twin turned with its limbs competes with a different
+    fit of the limbs, not only with the other heading, and on dev clips seen from the front
+    that made the check keep the wrong one.
     """
 
     frames: int = 10
@@ -347,8 +358,11 @@ class HeadingSettings:
     twin_passes: int = 1
     evidence_drift: float = 0.01
     evidence_threshold: float = 0.1
+    start_twin: str = "swapped"
 
     def __post_init__(self):
+        _check(self.start_twin in START_TWINS, f"HeadingSettings.start_twin must be one of "
+                                               f"{', '.join(START_TWINS)}, not {self.start_twin!r}")
         _positive(self, "frames", "margin", "every", "recheck_margin", "evidence_drift",
                   "evidence_threshold", allow_zero=True)
         _positive(self, "votes", "twin_passes")

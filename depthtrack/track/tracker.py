@@ -292,7 +292,9 @@ class Tracker:
         def turn(pose):
             self.renderers.upload(frame)
             energy = self._energy(frame)
-            x, _ = climb(energy, self.climbers.start, turned_pose(pose), self.recorder,
+            twin = (swapped_twin(self.body, pose) if self.settings.heading.start_twin == "swapped"
+                    else turned_pose(pose))
+            x, _ = climb(energy, self.climbers.start, twin, self.recorder,
                          passes=self.settings.start.passes)
             return x
         return turn
