@@ -125,3 +125,30 @@ def test_settings_validate_and_turn_the_recogniser_off():
             Tracker(body, cam, method="hc") as c:
         assert a.forest is None and b.forest is not None and c.forest is None
     assert TrackerSettings().to_dict()["propose"]["lost_frames"] == 3
+
+
+def test_track_settings_option_reaches_the_tracker_and_bad_ones_are_refused(squat, tmp_path, capsys):
+    import json
+
+    from depthtrack.cli import main
+
+    short = tmp_path / "short"
+    out = tmp_path / "track"
+    # five frames are enough to see the settings written; no check after the start
+    from depthtrack.io.sequence import write_sequence
+    write_sequence(short, [squat.depth(i) for i in range(5)], squat.camera, squat.fps)
+    given = {"heading": {"frames": 0, "every": 8}, "propose": {"lost_frames": 5}}
+    assert main(["track", str(short), "-o", str(out), "--quiet", "--settings", json.dumps(given)]) == 0
+    written = json.loads((out / "summary.json").read_text())["settings"]
+    assert written["heading"]["every"] == 8 and written["propose"]["lost_frames"] == 5
+    assert written["heading"]["start_twin"] == "swapped"           # the rest stays default
+    # a track's summary.json gives the same settings back
+    assert main(["track", str(short), "-o", str(tmp_path / "again"), "--quiet",
+                 "--settings", str(out / "summary.json")]) == 0
+    assert json.loads((tmp_path / "again" / "summary.json").read_text())["settings"] == written
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"heading": {"start_twin": "mirrored"}}')
+    capsys.readouterr()
+    assert main(["track", str(short), "-o", str(tmp_path / "no"), "--quiet", "--settings", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "start_twin" in err[0] and not (tmp_path / "no").exists()

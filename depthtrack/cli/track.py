@@ -20,6 +20,7 @@ examples:
   depthtrack track seq_walk -o track_walk
   depthtrack track seq_walk -o track_walk --method hc --likelihood pixel --overlay walk.mp4
   depthtrack track seq_walk -o track_walk --shape-fit on       # fit the person's proportions
+  depthtrack track seq_walk -o track_walk --settings '{"heading": {"every": 8}}'
   depthtrack track recording.mkv -o track_kinect
   depthtrack track realsense.bag -o track_rs --topic /device_0/sensor_0/Depth_0/image/data
 
@@ -61,9 +62,13 @@ def register(subparsers) -> None:
     p.add_argument("--init-from-groundtruth", action="store_true",
                    help="ABLATION ONLY: start from a pose fitted to the ground-truth joints of "
                         "frame 0 instead of the automatic initialisation (recorded in summary.json)")
-    p.add_argument("--shape-fit", choices=("on", "off"), default="off",
+    p.add_argument("--shape-fit", choices=("on", "off"), default=None,
                    help="on: fit the body's shape (segment lengths, widths, girth) to the first "
                         "16 frames before tracking; off (default): the template's proportions")
+    p.add_argument("--settings", metavar="JSON", default=None,
+                   help="tracker settings, a file or JSON text: an object of setting groups as summary.json's "
+                        "\"settings\" holds them (only the fields to change, e.g. "
+                        "{\"heading\": {\"every\": 8}}), or a track's summary.json itself")
     from .export import add_export_options
     add_export_options(p, "--export", "also write these formats into OUT/exports/: glb, gltf, c3d, json, "
                                       "bvh, csv (comma-separated; see `depthtrack export`)")
@@ -95,13 +100,26 @@ def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
 
 
 def _settings(args):
-    """The tracker settings the options ask for."""
+    """The tracker settings the options ask for (``--settings``, then ``--shape-fit``)."""
     import dataclasses
 
+    from ..body.shape import read_json_source
     from ..track.settings import TrackerSettings
 
     s = TrackerSettings()
-    return s.replace(shape=dataclasses.replace(s.shape, enabled=args.shape_fit == "on"))
+    if args.settings is not None:
+        data, path = read_json_source(args.settings, "tracker settings")
+        if isinstance(data, dict) and isinstance(data.get("settings"), dict):
+            data = data["settings"]                     # a track's summary.json
+        if not isinstance(data, dict):
+            raise InputError(path, "tracker settings must be a JSON object of setting groups")
+        try:
+            s = TrackerSettings(**data)         # groups, and the flat names summary.json keeps
+        except InputError as exc:
+            raise InputError(path, exc.problem) from None
+    if args.shape_fit is not None:
+        s = s.replace(shape=dataclasses.replace(s.shape, enabled=args.shape_fit == "on"))
+    return s
 
 
 def run(args) -> int:
