@@ -44,7 +44,8 @@ class Detection:
     tip : (3,) float
         The geodesic extremum itself (the limb's end point on the surface).
     source : str
-        'classifier' or 'heuristic'.
+        'classifier' or 'heuristic'; the tracker also makes 'recognizer' detections of the
+        joint proposals (label a joint class, 'knee'; :func:`depthtrack.track.proposals.proposal_detections`).
     """
 
     label: str

@@ -5,15 +5,16 @@ A frame is a pipeline of stages over a :class:`TrackingState` (:mod:`.state`):
 * :mod:`.observe` -- segment, ROI, the observed image (:mod:`.observation`: pure image functions);
 * :mod:`.search` -- predict with the motion prior, hill-climb (:mod:`.hill_climb`) the MAP
   energy (:mod:`.energy`), and the final polish at finer tiles;
-* :mod:`.propagate` -- part detections through evidence propagation (:mod:`.evidence`) in
-  the association loop (:mod:`.association`);
+* :mod:`.propagate` -- part detections and the recogniser's side-free joint proposals
+  (:mod:`.proposals`) through evidence propagation (:mod:`.evidence`) in the association
+  loop (:mod:`.association`);
 * :mod:`.judge` -- the unexplained share, lost or not, recovery by the global search;
 * :mod:`.start` -- the global search of a start; :mod:`.heading` -- the front/back check;
   :mod:`.height` -- the body height;
 * :mod:`.tracker` -- :class:`Tracker` (owns the renderers, :mod:`.renderers`; runs the
   stages; ``init`` / ``step`` / ``track_sequence``); :mod:`.loop` -- the frame loop and
   :func:`track_stream`; :mod:`.run` -- :func:`run_tracking`; :mod:`.settings` -- the settings, one group per
-  stage; :mod:`.record` -- timings and counts.
+  stage (:mod:`.flat_names` -- their earlier flat names); :mod:`.record` -- timings and counts.
 """
 from .association import associate, expand_correspondences, prune_explained
 from .evidence import PartModel, iterated_unscented_update, propagate_evidence, sigma_points

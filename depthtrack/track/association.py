@@ -7,6 +7,11 @@ Given the hill-climbed pose ``x_best`` and the frame's part detections:
    the model-based search has lost a part, and then they lie far from every part.
 2. *Expand* each remaining detection into correspondences with every body part of its
    class: a "hand" may be the left or the right hand.
+   The recogniser's joint *proposals* (elbows, knees, ...) join as detections of their
+   joint's class, side-free: a "knee" may be the left or the right knee. A proposal is
+   explained when it lies within its own distance of the model's joint of its class (the
+   recogniser's classes are good, its sides are not); the kept ones are tried after the
+   detections, at most ``max_proposal_correspondences`` of them, most confident first.
 3. *Greedy*: for each correspondence (best detection score first), evidence propagation
    from ``x_best`` conditioned on that correspondence alone gives a pose far from
    ``x_best``; local hill climbing refines it; it replaces ``x_best`` when its energy is
@@ -38,12 +43,15 @@ class Correspondence:
     energy : float
         Energy after evidence propagation (and hill climbing), NaN until tried.
     accepted : bool
+    proposal : bool
+        From a joint proposal of the recogniser (not from the part detector).
     """
 
     part: str
     detection: object
     energy: float = float("nan")
     accepted: bool = False
+    proposal: bool = False
 
 
 @dataclass
@@ -55,7 +63,7 @@ class AssociationResult:
     pose : (48,) float
     energy : float
     pruned : int
-        Detections dropped as already explained.
+        Detections (and proposals) dropped as already explained.
     tried : list of Correspondence
     """
 
@@ -94,6 +102,34 @@ def prune_explained(detections, part_positions, distance: float):
     return kept
 
 
+def prune_by_class(detections, joint_positions, classes, distance: float):
+    """Detections farther than ``distance`` from every model part of their own class.
+
+    Parameters
+    ----------
+    detections : sequence of objects with ``label`` (a key of ``classes``) and ``position (3,)``
+    joint_positions : dict {str: (3,) float}
+        Positions of the current best pose's parts, by part name.
+    classes : dict {str: tuple of str}
+        The parts a detection of each label may be (``{"knee": ("l_knee", "r_knee")}``).
+    distance : float
+        Metres.
+
+    Returns
+    -------
+    list
+        The detections that are *not* explained, in input order.
+    """
+    kept = []
+    for det in detections:
+        names = [n for n in classes.get(det.label, ()) if n in joint_positions]
+        near = np.array([joint_positions[n] for n in names], dtype=np.float64).reshape(-1, 3)
+        d = np.linalg.norm(near - np.asarray(det.position, dtype=np.float64), axis=1)
+        if d.size == 0 or d.min() > distance:
+            kept.append(det)
+    return kept
+
+
 def expand_correspondences(detections, part_names=None, classes=CLASS_PARTS):
     """Every (part, detection) pair whose classes match, best detection score first.
 
@@ -118,7 +154,9 @@ def expand_correspondences(detections, part_names=None, classes=CLASS_PARTS):
 
 
 def associate(pose, energy_value, detections, part_positions, propagate, evaluate,
-                   prune_distance: float = 0.15, max_correspondences: int = 8) -> AssociationResult:
+              prune_distance: float = 0.15, max_correspondences: int = 8, proposals=(),
+              joint_positions=None, proposal_classes=None, proposal_distance: float = 0.15,
+              max_proposal_correspondences: int = 0) -> AssociationResult:
     """The greedy association loop (module docstring).
 
     Parameters
@@ -138,7 +176,18 @@ def associate(pose, energy_value, detections, part_positions, propagate, evaluat
     prune_distance : float
         Metres.
     max_correspondences : int
-        Most correspondences tried per frame (best detection scores first), bounding the time.
+        Most correspondences of ``detections`` tried per frame (best scores first), bounding
+        the time.
+    proposals : sequence of Detection-like
+        Joint proposals, ``label`` a key of ``proposal_classes``, ``score`` their confidence.
+    joint_positions : dict {str: (3,) float}
+        The model's parts by name (at least those of ``proposal_classes``), for their pruning.
+    proposal_classes : dict {str: tuple of str}
+        The parts a proposal of each label may be.
+    proposal_distance : float
+        A proposal this near (m) a model part of its class is explained.
+    max_proposal_correspondences : int
+        Most proposal correspondences tried per frame (after the detections').
 
     Returns
     -------
@@ -147,8 +196,17 @@ def associate(pose, energy_value, detections, part_positions, propagate, evaluat
     best = np.asarray(pose, dtype=np.float64).copy()
     best_energy = float(energy_value)
     kept = prune_explained(detections, part_positions, prune_distance)
-    result = AssociationResult(best, best_energy, pruned=len(detections) - len(kept))
-    for corr in expand_correspondences(kept)[:max_correspondences]:
+    todo = expand_correspondences(kept)[:max_correspondences]
+    pruned = len(detections) - len(kept)
+    if len(proposals) and max_proposal_correspondences > 0:
+        kept_p = prune_by_class(proposals, joint_positions, proposal_classes, proposal_distance)
+        pruned += len(proposals) - len(kept_p)
+        extra = expand_correspondences(kept_p, classes=proposal_classes)[:max_proposal_correspondences]
+        for corr in extra:
+            corr.proposal = True
+        todo += extra
+    result = AssociationResult(best, best_energy, pruned=pruned)
+    for corr in todo:
         proposal = propagate(best, corr.part, corr.detection)
         candidate, e = evaluate(proposal, corr.part)
         corr.energy = float(e)

@@ -26,6 +26,10 @@ from ..motion.prior import apply_velocity
 #: Skeleton joint carrying each part, and the joints of its chain from the root.
 PART_JOINT = {"head": "neck", "l_hand": "l_wrist", "r_hand": "r_wrist",
               "l_foot": "l_ankle", "r_foot": "r_ankle"}
+#: Joints that may also be parts at their centre (the recogniser's joint proposals): a
+#: joint-centre part is named after its skeleton joint.
+CENTRE_JOINTS = ("l_shoulder", "r_shoulder", "l_elbow", "r_elbow", "l_wrist", "r_wrist",
+                 "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle")
 
 
 # ---------------------------------------------------------------------- generic unscented math
@@ -199,24 +203,43 @@ def iterated_unscented_update(f, prior_mean, prior_cov, z, obs_cov, start=None,
 
 
 # ---------------------------------------------------------------------- body parts
+def _chain_parameters(parents, j: int):
+    """``(k,) int`` pose-parameter indices moving joint ``j``'s frame: the root translation,
+    then the rotation of every joint from the root down to ``j`` (included)."""
+    chain = []
+    while j >= 0:
+        chain.append(j)
+        j = int(parents[j])
+    idx = [0, 1, 2]
+    for k in reversed(chain):
+        idx += [3 + 3 * k, 4 + 3 * k, 5 + 3 * k]
+    return np.array(idx)
+
+
 @dataclass(frozen=True)
 class PartModel:
-    """Where the five detectable parts sit on a body, and the chains that move them.
+    """Where the detectable parts sit on a body, and the chains that move them.
+
+    The five surface parts (``head, l_hand, r_hand, l_foot, r_foot``, the geodesic
+    detector's classes) come first, then any joint-centre parts (:data:`CENTRE_JOINTS`,
+    the recogniser's proposals): offset and radius 0, since a proposal is a joint centre
+    already pushed behind the surface.
 
     Attributes
     ----------
     names : tuple of str
-        ``head, l_hand, r_hand, l_foot, r_foot``.
-    joint : (5,) int
+        ``head, l_hand, r_hand, l_foot, r_foot``, then the joint-centre parts.
+    joint : (P,) int
         Skeleton joint whose frame carries each part.
-    offset : (5, 3) float
+    offset : (P, 3) float
         The part centre in that joint's frame (metres).
-    radius : (5,) float
+    radius : (P,) float
         Half the part's thickness: a detection on the visible surface lies this much nearer
         the camera than the centre.
     chains : dict {str: (k,) int}
         Pose-parameter indices from the root to the part (root translation and rotation,
-        then every joint on the way, the part's own joint included).
+        then every joint on the way; the part's own joint only when it moves the part, i.e.
+        not for a joint-centre part).
     """
 
     names: tuple
@@ -226,9 +249,10 @@ class PartModel:
     chains: dict
 
     @classmethod
-    def from_body(cls, body) -> "PartModel":
+    def from_body(cls, body, centres=()) -> "PartModel":
         """Part centres measured on ``body``'s mesh: head centre, hand centroid, and the
-        centroid of the upper half of the foot (what a camera in front sees of it)."""
+        centroid of the upper half of the foot (what a camera in front sees of it); then
+        the joint-centre parts named in ``centres`` (of :data:`CENTRE_JOINTS`)."""
         names = tuple(PART_JOINT)
         joint_ids = {n: i for i, n in enumerate(body.joint_names)}
         parents = np.asarray(body.parents)
@@ -256,15 +280,18 @@ class PartModel:
             joints.append(j)
             offsets.append(offset)
             radii.append(radius)
-            chain, k = [], j
-            while k >= 0:
-                chain.append(k)
-                k = int(parents[k])
-            idx = [0, 1, 2]
-            for k in reversed(chain):
-                idx += [3 + 3 * k, 4 + 3 * k, 5 + 3 * k]
-            chains[name] = np.array(idx)
-        return cls(names, np.array(joints), np.array(offsets), np.array(radii), chains)
+            chains[name] = _chain_parameters(parents, j)
+        for name in centres:
+            if name not in CENTRE_JOINTS:
+                raise ValueError(f"not a joint-centre part: {name!r}")
+            j = joint_ids[name]
+            joints.append(j)
+            offsets.append(np.zeros(3))
+            radii.append(0.0)
+            # the joint's own rotation does not move its centre: the chain stops at its parent
+            chains[name] = _chain_parameters(parents, int(parents[j]))
+        names = names + tuple(centres)
+        return cls(names, np.array(joints), np.array(offsets).reshape(-1, 3), np.array(radii), chains)
 
     def index(self, name: str) -> int:
         return self.names.index(name)
@@ -282,7 +309,7 @@ class PartModel:
 
         Returns
         -------
-        (N, 5, 3) float, camera frame.
+        (N, P, 3) float, camera frame.
         """
         world = np.asarray(body.world_transforms(np.atleast_2d(poses)))
         T = world[:, self.joint]                                  # (N, 5, 4, 4)

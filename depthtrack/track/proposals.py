@@ -9,6 +9,9 @@ most of the time, whatever the body's orientation). So the tracker uses them sid
 * **Start** (:func:`proposal_candidates`): poses fitted to the proposals, with the sides as
   labelled and exchanged, join the global search's candidates -- a start in any orientation
   (lying, upside down), confirmed by the likelihood.
+* **Evidence** (:func:`proposal_detections`): the limb joints' proposals (elbows, knees,
+  ...) join the association stage as detections of their joint's class, side-free, so
+  evidence propagation can pull a lost elbow or knee back (:mod:`.association`).
 * **Judge** (:func:`disagreement`): the share of the confident trunk proposals that no
   joint of the pose comes near. A track whose silhouette still fits but whose body is upside
   down, or turned into the wrong limb arrangement, explains the depth about as well as the
@@ -19,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import JOINT_INDEX, JOINT_NAMES
+from ..detect.parts import Detection
 from ..motion.retarget import best_rotation
 from ..rotations import matrix_to_rotvec
 from .heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints
@@ -29,6 +33,12 @@ TRUNK_INDEX = np.array([JOINT_INDEX[n] for n in TRUNK])
 #: Joints that fix the root of a pose fitted to proposals (Kabsch).
 ROOT_JOINTS = np.array([JOINT_INDEX[n] for n in ("head", "neck", "pelvis", "l_shoulder",
                                                  "r_shoulder", "l_hip", "r_hip")])
+#: Joint classes whose proposals may feed evidence propagation -> the parts (joint-centre
+#: parts of :class:`~.evidence.PartModel`) a proposal of that class may be, either side.
+JOINT_CLASSES = {c: ("l_" + c, "r_" + c) for c in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")}
+#: Proposals of one class closer than this (m) are one mode (a left joint holds its right
+#: twin's modes too).
+SAME_MODE = 0.01
 
 
 def frame_proposals(tracker, frame):
@@ -128,3 +138,45 @@ def proposal_candidates(body, proposals, min_confidence: float):
         if x is not None:
             out.append(x)
     return np.array(out).reshape(-1, body.dof)
+
+
+def proposal_detections(proposals, classes, min_confidence: float) -> list:
+    """The proposals of the joint ``classes`` as side-free detections for the association.
+
+    Parameters
+    ----------
+    proposals : JointProposals or None
+        ``positions (15, k, 3)``, ``confidence (15, k)``.
+    classes : sequence of str
+        Keys of :data:`JOINT_CLASSES` (``"elbow"``, ``"knee"``, ...).
+    min_confidence : float
+        Proposals below this (m^2) are left out.
+
+    Returns
+    -------
+    list of Detection
+        ``label`` the class, ``position`` the mode (a joint centre), ``score`` the summed
+        confidence of both sides' proposals at that mode (m^2), ``source`` "recognizer";
+        per class, the modes of the left and the right joint merged (within
+        :data:`SAME_MODE`), most confident first.
+    """
+    if proposals is None:
+        return []
+    pos, ok = confident(proposals, min_confidence)
+    conf = np.asarray(proposals.confidence, dtype=np.float64)
+    out = []
+    for c in classes:
+        modes, scores = [], []
+        for name in JOINT_CLASSES[c]:
+            j = JOINT_INDEX[name]
+            for p, w in zip(pos[j][ok[j]], conf[j][ok[j]]):
+                near = [i for i, m in enumerate(modes) if np.linalg.norm(m - p) < SAME_MODE]
+                if near:
+                    scores[near[0]] += w
+                else:
+                    modes.append(p.copy())
+                    scores.append(float(w))
+        for i in np.argsort(-np.asarray(scores), kind="stable"):
+            out.append(Detection(c, modes[i], np.zeros(3), np.array([-1, -1]), float(scores[i]),
+                                 tip=modes[i].copy(), source="recognizer"))
+    return out

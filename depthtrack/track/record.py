@@ -12,9 +12,12 @@ from contextlib import contextmanager
 #: detect and evidence time spent inside them; ``search`` excludes its render time.
 STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover",
           "heading", "propose")
-#: Counters.
+#: Counters. ``correspondences`` / ``accepted`` count every correspondence the association
+#: tried / kept; ``proposal_correspondences`` / ``proposal_accepted`` those of them from the
+#: recogniser's joint proposals (``ProposalSettings.evidence``).
 COUNTS = ("candidates", "render_calls", "detections", "correspondences", "accepted",
-          "recoveries_tried", "recoveries", "frames_without_person", "reinitialisations")
+          "recoveries_tried", "recoveries", "frames_without_person", "reinitialisations",
+          "proposal_correspondences", "proposal_accepted")
 
 
 class Recorder:

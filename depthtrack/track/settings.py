@@ -19,6 +19,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from ..errors import InputError
+from .flat_names import FLAT_NAMES  # noqa: F401  (re-exported: the flat names' one place)
 
 
 def _check(ok: bool, message: str) -> None:
@@ -244,6 +245,14 @@ class ProposalSettings:
     leaves at most ``accept_margin`` more of the observation unexplained. ``start_weight``
     times the foreground's pixel count times the disagreeing share is added to every start
     finalist's score.
+
+    ``evidence``: the proposals of the ``evidence_joints`` classes (of ``shoulder, elbow,
+    wrist, hip, knee, ankle``) also join the association stage as side-free detections of
+    the joint-centre parts (a knee proposal may be either knee), so evidence propagation
+    can pull a lost elbow or knee back. A proposal within ``evidence_distance`` (m) of the
+    model's joint of its class counts as explained; of the others at most
+    ``evidence_max`` correspondences are tried per frame, most confident first, after the
+    part detector's.
     """
 
     enabled: bool = True
@@ -254,10 +263,23 @@ class ProposalSettings:
     accept_margin: float = 0.1
     start_candidates: bool = True
     start_weight: float = 0.1
+    evidence: bool = True
+    evidence_joints: tuple = ("elbow", "knee")
+    evidence_distance: float = 0.2
+    evidence_max: int = 4
 
     def __post_init__(self):
-        _check(isinstance(self.enabled, bool), f"ProposalSettings.enabled must be true or false, "
-                                               f"not {self.enabled!r}")
+        for name in ("enabled", "evidence"):
+            _check(isinstance(getattr(self, name), bool),
+                   f"ProposalSettings.{name} must be true or false, not {getattr(self, name)!r}")
+        object.__setattr__(self, "evidence_joints", tuple(self.evidence_joints))
+        known = ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
+        _check(all(j in known for j in self.evidence_joints),
+               f"ProposalSettings.evidence_joints must be of {', '.join(known)}, not "
+               f"{self.evidence_joints!r}")
+        _check(isinstance(self.evidence_max, int) and self.evidence_max >= 0,
+               f"ProposalSettings.evidence_max must be an integer >= 0, not {self.evidence_max!r}")
+        _positive(self, "evidence_distance")
         _check(isinstance(self.start_candidates, bool),
                f"ProposalSettings.start_candidates must be true or false, not {self.start_candidates!r}")
         _positive(self, "distance", "lost_frames")
@@ -430,30 +452,6 @@ GROUPS = {"observe": ObserveSettings, "energy": EnergySettings, "search": Search
           "propose": ProposalSettings,
           "start": StartSettings, "heading": HeadingSettings, "height": HeightSettings,
           "shape": ShapeSettings}
-
-#: The earlier flat setting names -> (group, field).
-FLAT_NAMES = {
-    "tile": ("observe", "tile"), "roi_margin": ("observe", "roi_margin"),
-    "depth_band": ("observe", "depth_band"), "min_person_area": ("observe", "min_person_area"),
-    "absent_frames": ("observe", "absent_frames"),
-    "damping": ("energy", "damping"), "likelihood_weight": ("energy", "likelihood_weight"),
-    "pose_prior_std": ("energy", "pose_prior_std"),
-    "levels": ("search", "levels"), "max_iterations": ("search", "max_iterations"),
-    "step_scale": ("search", "step_scale"), "passes": ("search", "passes"),
-    "diagonals": ("search", "diagonals"),
-    "prune_distance": ("associate", "prune_distance"), "ep_obs_std": ("associate", "ep_obs_std"),
-    "ep_prior_scale": ("associate", "ep_prior_scale"),
-    "max_correspondences": ("associate", "max_correspondences"),
-    "refine_level": ("associate", "refine_level"),
-    "refine_with_prior": ("associate", "refine_with_prior"),
-    "refine_scope": ("associate", "refine_scope"), "accept": ("associate", "accept"),
-    "accept_margin": ("associate", "accept_margin"),
-    "fine_tile": ("polish", "fine_tile"), "fine_iterations": ("polish", "fine_iterations"),
-    "lost_ratio": ("judge", "lost_ratio"), "lost_margin": ("judge", "lost_margin"),
-    "init_passes": ("start", "passes"), "facing_prior": ("start", "facing_prior"),
-    "heading_frames": ("heading", "frames"), "heading_margin": ("heading", "margin"),
-}
-
 
 @dataclass(frozen=True, init=False)
 class TrackerSettings:

@@ -45,7 +45,7 @@ from .evidence import PartModel
 from .heading import recheck_heading, swapped_twin, turned_pose
 from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
 from .observe import as_depth, observe, person_present
-from .propagate import associate_stage
+from .propagate import associate_stage, evidence_parts
 from .record import Recorder
 from .renderers import RendererSet
 from .search import Climbers, climb, polish, predict, search
@@ -111,11 +111,12 @@ class Tracker:
         if detector is None and method != "hc":
             from ..detect import detect_parts as detector
         self.detector = detector
-        self.parts = PartModel.from_body(body)
         self.forest = None
         if method != "hc" and s.propose.enabled:
             from ..detect.recognizer import load_forest
             self.forest = load_forest()
+        self.parts = PartModel.from_body(body, centres=evidence_parts(s.propose)
+                                         if self.forest is not None else ())
         self.climbers = Climbers.build(s, self.fps, clip=body.clip)
         self.recorder = Recorder()
         self.state = TrackingState(velocity=np.zeros(body.dof))
