@@ -30,6 +30,7 @@ after looking at a test figure turns that figure into a dev figure.
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import datetime
 import json
 import os
@@ -261,6 +262,9 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=None, help="noise seeds per condition (preset 3)")
     parser.add_argument("--methods", default=None, help="tracking methods (preset hc+ep,hc; quick hc+ep)")
     parser.add_argument("--motions", default=None, help="comma-separated motion names of the split to run")
+    parser.add_argument("--jobs", type=int, default=1,
+                        help="motion-condition groups run at once (default 1; frame rates are "
+                             "then shared-machine figures)")
     parser.add_argument("--keep-tracks", action="store_true",
                         help="also keep every track (OUT/SPLIT/tracks/SEQUENCE/METHOD/), to look at the failures")
     args = parser.parse_args(argv)
@@ -274,8 +278,8 @@ def main(argv=None) -> int:
     seconds = args.seconds or preset["seconds"]
     n_seeds = args.seeds or preset["seeds"]
     methods = (args.methods or preset["methods"]).split(",")
-    if n_seeds < 1 or seconds <= 0:
-        print("benchmark: --seeds and --seconds must be positive", file=sys.stderr)
+    if n_seeds < 1 or seconds <= 0 or args.jobs < 1:
+        print("benchmark: --seeds, --seconds and --jobs must be positive", file=sys.stderr)
         return 2
     data = Path(args.data).resolve()
     motions = split_motions(args.split, data)
@@ -302,33 +306,42 @@ def main(argv=None) -> int:
         conds = [conditions[i % len(conditions)]] if one_each else conditions
         plan.append((name, kind, source, start, conds))
     total = sum(len(p[4]) for p in plan) * len(seeds)
-    sequences, done = [], 0
-    for name, kind, source, start, conds in plan:
-        for cond in conds:
-            # One synth per seed, one eval for the seeds together (fewer process starts).
-            group = []
-            for s_index, seed in enumerate(seeds):
-                seq_name = f"{name}_c{conditions.index(cond)}_s{seed}"
-                path = seq_dir / seq_name
-                synth = synth_command(kind, source, path, start, seconds, cond, seed)
-                run_depthtrack(synth)
-                group.append((seq_name, path, synth, seed, s_index))
-            evaluate = ["depthtrack", "eval", *[shown(g[1]) for g in group], "--methods", ",".join(methods),
-                        "--json", "--quiet"]
-            if args.keep_tracks:
-                evaluate += ["--tracks-out", shown(out / "tracks"), "--force"]
-            result = json.loads(run_depthtrack(evaluate))["sequences"]
-            for seq_name, path, synth, seed, s_index in group:
-                metrics = {m: result[seq_name][m] for m in methods}
+
+    def run_group(name, kind, source, start, cond):
+        """One motion under one condition: a synth per seed, one eval for the seeds together
+        (fewer process starts). Returns the group's sequence records."""
+        group = []
+        for s_index, seed in enumerate(seeds):
+            seq_name = f"{name}_c{conditions.index(cond)}_s{seed}"
+            path = seq_dir / seq_name
+            synth = synth_command(kind, source, path, start, seconds, cond, seed)
+            run_depthtrack(synth)
+            group.append((seq_name, path, synth, seed, s_index))
+        evaluate = ["depthtrack", "eval", *[shown(g[1]) for g in group], "--methods", ",".join(methods),
+                    "--json", "--quiet"]
+        if args.keep_tracks:
+            evaluate += ["--tracks-out", shown(out / "tracks"), "--force"]
+        result = json.loads(run_depthtrack(evaluate))["sequences"]
+        return [{"name": seq_name, "motion": name, "kind": kind, "source": source,
+                 "condition": cond, "condition_label": condition_label(cond),
+                 "seed": seed, "seed_index": s_index, "start_s": start,
+                 "synth_command": shlex.join(synth), "eval_command": shlex.join(evaluate),
+                 "metrics": {m: result[seq_name][m] for m in methods}}
+                for seq_name, path, synth, seed, s_index in group]
+
+    tasks = [(name, kind, source, start, cond) for name, kind, source, start, conds in plan for cond in conds]
+    results, done = {}, 0
+    # --jobs groups at once, each in its own processes; the report keeps the plan's order
+    with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        futures = {pool.submit(run_group, *t): k for k, t in enumerate(tasks)}
+        for future in concurrent.futures.as_completed(futures):
+            results[futures[future]] = records = future.result()
+            for r in records:
                 done += 1
-                print(f"[{done}/{total}] {seq_name}: " + ", ".join(
-                    f"{m} {100 * metrics[m]['within_10cm']:.0f}% within 10 cm, {metrics[m]['fps']:.2f} fps"
-                    for m in methods), file=sys.stderr, flush=True)
-                sequences.append({"name": seq_name, "motion": name, "kind": kind, "source": source,
-                                  "condition": cond, "condition_label": condition_label(cond),
-                                  "seed": seed, "seed_index": s_index, "start_s": start,
-                                  "synth_command": shlex.join(synth), "eval_command": shlex.join(evaluate),
-                                  "metrics": metrics})
+                print(f"[{done}/{total}] {r['name']}: " + ", ".join(
+                    f"{m} {100 * r['metrics'][m]['within_10cm']:.0f}% within 10 cm, "
+                    f"{r['metrics'][m]['fps']:.2f} fps" for m in methods), file=sys.stderr, flush=True)
+    sequences = [r for k in sorted(results) for r in results[k]]
     groups, overall = aggregate(sequences, methods)
     try:
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True,
@@ -339,7 +352,7 @@ def main(argv=None) -> int:
         "format": "depthtrack-benchmark/1", "split": args.split, "preset": preset_name,
         "command": command, "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "machine": f"{os.cpu_count()} CPUs", "commit": commit, "seconds": seconds, "fps": FPS,
-        "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0,
+        "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0, "jobs": args.jobs,
         "motions": [{"name": n, "kind": k, "source": s, "start_s": st} for n, k, s, st, _ in plan],
         "conditions": conditions, "sequences": sequences, "groups": groups, "overall": overall,
     }
