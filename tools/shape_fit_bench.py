@@ -75,13 +75,15 @@ def clip_start(motion, seconds, start):
 
 
 def track_scores(seq, result, body, truth):
-    """Joints within 10 cm, mean joint error and the body's segment-length errors of one track."""
+    """Joints within 10 cm, mean joint error, the body's segment-length errors and the
+    front/back switches of one track."""
     from depthtrack.evaluate.metrics import fraction_within, point_errors
 
     err = point_errors(result.joints, seq.joints)
     return {"within_10cm": round(fraction_within(err), 4),
             "mean_error_m": round(float(np.nanmean(np.where(np.isinf(err), np.nan, err))), 4),
-            "segment_errors_m": length_errors(body.segment_lengths(), truth)}
+            "segment_errors_m": length_errors(body.segment_lengths(), truth),
+            "heading_switches": len(result.info.get("heading_switches") or [])}
 
 
 def true_body(seq):
