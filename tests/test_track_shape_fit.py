@@ -65,6 +65,11 @@ def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, t
         ctx.gc_mode = mode
     fit = summary["body"]["shape_fit"]
     assert fit["fitted"] and len(fit["frames_used"]) == 4 and fit["energy"] < fit["start_energy"]
+    # the re-track starts from the trial's frame-0 pose (its front/back decision carries
+    # over) and that pose stays out of summary.json
+    assert fit["frames_used"][0] == 0 and "start_pose" not in fit
+    assert summary["initialisation_details"]["mode"] == "given pose"
+    assert "trial track's frame-0 pose" in summary["initialisation"]
     assert summary["settings"]["shape"]["frames"] == 5
     assert summary["body_height_m"] == pytest.approx(1.75)      # given: not rescaled
     assert summary["body"]["shape"] == body.shape.to_dict() and not body.shape.is_average
@@ -78,6 +83,28 @@ def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, t
     back = BodyModel.from_json(tmp_path / "out" / "body.json")
     np.testing.assert_allclose(back.joint_positions(result.poses), result.joints, atol=1e-9)
     assert read_track(tmp_path / "out").summary["body"]["shape_fit"]["fitted"]
+
+
+def test_fit_body_shape_hands_over_frame_0s_pose(shaped_sequence):
+    from depthtrack.track import TrackerSettings
+    from depthtrack.track.height import fit_body_shape
+    from depthtrack.track.tracker import Tracker
+
+    seq, truth = shaped_sequence
+    template = BodyModel.default(1.75)
+    settings = _settings()
+    frames = [seq.depth(i) for i in range(5)]
+    body, info = fit_body_shape(frames, template, seq.camera, fps=seq.fps, settings=settings,
+                                fit_scale=False)
+    start = np.array(info["start_pose"])
+    assert start.shape == (48,) and np.all(np.isfinite(start))
+    # the pose the fit refined with the fitted body: the person's joints within a few cm
+    joints = body.joint_positions(start)
+    assert np.nanmedian(np.linalg.norm(joints - seq.joints[0], axis=1)) < 0.04
+    with Tracker(template, seq.camera, method="hc", fps=seq.fps, settings=TrackerSettings()) as t:
+        auto = t.init(frames[0])
+    # and on this frame it agrees with the template's own start (front/back included)
+    assert np.linalg.norm(template.joint_positions(auto) - joints, axis=1).max() < 0.15
 
 
 def test_shape_fit_option_sets_the_settings():

@@ -11,6 +11,18 @@ of the fitted body, and the median over everybody. No figure here is tuned on te
 
     PYTHONPATH=. python tools/shape_fit_bench.py ../shared/data OUT_DIR [--people 10]
         [--clothing none|tight|loose] [--frames 16] [--json]
+
+``--tracked`` (issue 11's first goal): per person ``k`` the motion's busiest ``--seconds``
+(tools/benchmark.py's ``busiest_window``; ``--start S`` for a fixed start) is synthesized
+twice with the same camera, height and noise seed -- once with the template's build
+(``--shape average``) and once as the random person -- and tracked ("hc+ep", height from
+``sequence.json``) as ``--bodies`` says (:data:`BODIES`: average, template, fitted,
+oracle). Printed: joints within 10 cm per person and body, mean and s.d. over people, the
+median |segment-length error| of each body written; ``OUT_DIR/rows.jsonl`` gets each
+person's row as it is done.
+
+    PYTHONPATH=. python tools/shape_fit_bench.py ../shared/data OUT_DIR --tracked
+        --split dev --people 4 --first-person 100 [--bodies average,template,fitted,oracle]
 """
 from __future__ import annotations
 
@@ -44,71 +56,135 @@ def track_first_frames(seq, body, frames):
     return np.array(poses), [f.mask for f in fgs], [f.floor_plane for f in fgs], depths
 
 
-def run_tracked(k, motion, camera, out_dir, clothing, seconds):
-    """Person ``k`` tracked with the template body and with the fitted shape (module docstring)."""
+#: What ``--tracked`` tracks, per person (``--bodies``): "average" = the same motion, camera,
+#: height and noise seed synthesized with the template's build (``--shape average``) and
+#: tracked by default; "template" = the random person tracked by default (no shape fit);
+#: "fitted" = the random person with the tracker's shape fit (``--shape-fit on``);
+#: "oracle" = the random person tracked with its true body (``synth.shape``, unclothed).
+BODIES = ("average", "template", "fitted", "oracle")
+
+
+def clip_start(motion, seconds, start):
+    """``start`` (s), or the busiest ``seconds`` of the motion (tools/benchmark.py) when None."""
+    if start is not None:
+        return float(start)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from benchmark import busiest_window
+
+    return busiest_window("bvh", str(motion), seconds)
+
+
+def track_scores(seq, result, body, truth):
+    """Joints within 10 cm, mean joint error, the body's segment-length errors and the
+    front/back switches of one track."""
+    from depthtrack.evaluate.metrics import fraction_within, point_errors
+
+    err = point_errors(result.joints, seq.joints)
+    return {"within_10cm": round(fraction_within(err), 4),
+            "mean_error_m": round(float(np.nanmean(np.where(np.isinf(err), np.nan, err))), 4),
+            "segment_errors_m": length_errors(body.segment_lengths(), truth),
+            "heading_switches": len(result.info.get("heading_switches") or [])}
+
+
+def true_body(seq):
+    """The synthetic person's own body (``sequence.json`` ``synth.shape``: height and scales;
+    the skin without clothing), as the tracker would hold it."""
+    from depthtrack.body.shape import BodyShape
+
+    shape = BodyShape.from_dict(seq.meta["synth"]["shape"]["scales"])
+    return BodyModel.default(height=seq.subject_height, shape=shape)
+
+
+def track_with(seq, name):
+    """``(result, body, shape_fit_s)``: ``seq`` tracked "hc+ep" as ``name`` of :data:`BODIES` says."""
     import dataclasses
 
-    from depthtrack.evaluate.metrics import fraction_within, point_errors
     from depthtrack.track import TrackerSettings, run_tracking
 
-    person, info = make_subject(None, "random", k, clothing)
-    seq_dir = out_dir / f"person{k:02d}"
-    synthesize_bvh(motion, seq_dir, fps=25.0, start=1.0, seconds=seconds, camera=camera,
-                   noise="tof", seed=k, body=person, subject=info)
-    seq = open_sequence(seq_dir)
-    truth = info["segment_lengths_m"]
-    row = {"person": k, "motion": Path(motion).name, "camera": camera,
-           "height_m": info["height_m"], "frames": len(seq)}
     base = TrackerSettings()
-    for name, on in (("template", False), ("fitted", True)):
-        settings = base.replace(shape=dataclasses.replace(base.shape, enabled=on))
+    if name == "oracle":        # run_tracking's tracking, with the person's own body
+        body = true_body(seq)
+        with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=base) as tracker:
+            return tracker.track_sequence(seq), body, 0.0
+    settings = base.replace(shape=dataclasses.replace(base.shape, enabled=name == "fitted"))
+    result, body, summary = run_tracking(seq, settings=settings)
+    return result, body, summary["timings"]["shape_fit_s"]
+
+
+def run_tracked(k, motion, camera, out_dir, clothing, seconds, start=None, bodies=BODIES):
+    """Person ``k`` tracked as each of ``bodies`` says (:data:`BODIES`); one row of scores."""
+    start = clip_start(motion, seconds, start)
+    person, info = make_subject(None, "random", k, clothing)
+    row = {"person": k, "motion": Path(motion).name, "camera": camera,
+           "height_m": info["height_m"], "start_s": start}
+    builds = {"average" if name == "average" else "random" for name in bodies}
+    seqs = {}
+    for build in sorted(builds):
+        body, subject = (make_subject(info["height_m"], "average", k, "none") if build == "average"
+                         else (person, info))
+        seq_dir = out_dir / f"person{k:02d}" / build
+        synthesize_bvh(motion, seq_dir, fps=25.0, start=start, seconds=seconds, camera=camera,
+                       noise="tof", seed=k, body=body, subject=subject)
+        seqs[build] = open_sequence(seq_dir)
+    row["frames"] = len(next(iter(seqs.values())))
+    truth = info["segment_lengths_m"]
+    for name in bodies:
+        seq = seqs["average" if name == "average" else "random"]
         t = time.perf_counter()
-        result, body, summary = run_tracking(seq, settings=settings)
-        err = point_errors(result.joints, seq.joints)
-        row[name] = {"within_10cm": round(fraction_within(err), 4),
-                     "mean_error_m": round(float(np.nanmean(np.where(np.isinf(err), np.nan, err))), 4),
-                     "segment_errors_m": length_errors(body.segment_lengths(), truth),
-                     "shape_fit_s": summary["timings"]["shape_fit_s"],
-                     "seconds": round(time.perf_counter() - t, 1)}
+        result, body, fit_s = track_with(seq, name)
+        row[name] = {**track_scores(seq, result, body, seq.meta["synth"]["shape"]["segment_lengths_m"]
+                                    if name == "average" else truth),
+                     "shape_fit_s": fit_s, "seconds": round(time.perf_counter() - t, 1)}
     return row
+
+
+def summarise_tracked(rows, bodies):
+    """Mean and s.d. over people of joints within 10 cm, median |segment error| per body."""
+    out = {}
+    for name in bodies:
+        w = np.array([r[name]["within_10cm"] for r in rows])
+        out[name] = {"within_10cm_mean": round(float(np.mean(w)), 4),
+                     "within_10cm_sd": round(float(np.std(w, ddof=1)) if len(w) > 1 else 0.0, 4),
+                     "segment_error_median_m": round(float(np.median(np.abs(
+                         [v for r in rows for v in r[name]["segment_errors_m"].values()]))), 4)}
+    return out
 
 
 def main_tracked(args, motions):
     from depthtrack.errors import InputError
 
+    bodies = [b for b in BODIES if b in args.bodies.split(",")]
     rows, m = [], args.first_person      # the motions cycle from the first person's
     for k in range(args.first_person, args.first_person + args.people):
         while True:               # motions our BVH reader cannot map are skipped (and said so)
             motion = motions[m % len(motions)]
             m += 1
             try:
-                row = run_tracked(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.seconds)
+                row = run_tracked(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.seconds,
+                                  args.start, bodies)
                 break
             except InputError as exc:
                 print(f"skipped {motion.name}: {exc}", file=sys.stderr)
         rows.append(row)
-        t, f = row["template"], row["fitted"]
-        print(f"person {k:2d} {row['motion']:12s} {row['camera']:9s} h {row['height_m']:.2f} m: "
-              f"within 10 cm template {t['within_10cm']:.1%} fitted {f['within_10cm']:.1%}; "
-              f"segment error median template "
-              f"{100 * np.median(np.abs(list(t['segment_errors_m'].values()))):.1f} cm fitted "
-              f"{100 * np.median(np.abs(list(f['segment_errors_m'].values()))):.1f} cm; shape fit "
-              f"{f['shape_fit_s']:.0f} s", file=sys.stderr, flush=True)
+        args.out.mkdir(parents=True, exist_ok=True)     # each person's row as it comes (long runs)
+        with open(args.out / "rows.jsonl", "a", encoding="utf-8") as f:
+            f.write(json.dumps(row) + "\n")
+        print(f"person {k:2d} {row['motion']:12s} {row['camera']:9s} h {row['height_m']:.2f} m "
+              f"from {row['start_s']:.2f} s: within 10 cm "
+              + ", ".join(f"{n} {row[n]['within_10cm']:.1%}" for n in bodies)
+              + ("; fitted segment error median "
+                 f"{100 * np.median(np.abs(list(row['fitted']['segment_errors_m'].values()))):.1f} cm"
+                 if "fitted" in bodies else ""), file=sys.stderr, flush=True)
     summary = {"people": len(rows), "split": args.split, "clothing": args.clothing,
-               "seconds": args.seconds}
-    for name in ("template", "fitted"):
-        summary[name] = {
-            "within_10cm_mean": round(float(np.mean([r[name]["within_10cm"] for r in rows])), 4),
-            "segment_error_median_m": round(float(np.median(np.abs(
-                [v for r in rows for v in r[name]["segment_errors_m"].values()]))), 4)}
-    summary["rows"] = rows
+               "seconds": args.seconds, "bodies": bodies, **summarise_tracked(rows, bodies),
+               "rows": rows}
     if args.json:
         print(json.dumps(summary, indent=1))
     else:
-        for name in ("template", "fitted"):
-            print(f"{name}: joints within 10 cm {summary[name]['within_10cm_mean']:.1%} (mean over "
-                  f"people), median |segment length error| "
-                  f"{100 * summary[name]['segment_error_median_m']:.1f} cm")
+        for name in bodies:
+            print(f"{name}: joints within 10 cm {summary[name]['within_10cm_mean']:.1%} +- "
+                  f"{summary[name]['within_10cm_sd']:.1%} (mean +- s.d. over people), median "
+                  f"|segment length error| {100 * summary[name]['segment_error_median_m']:.1f} cm")
 
 
 def run_person(k, motion, camera, out_dir, clothing, frames, fit_frames=4, prior_weight=1.0,
@@ -165,8 +241,13 @@ def main(argv=None):
     ap.add_argument("--keep-height", action="store_true",
                     help="fit_scale=False: keep the sequence's height, as the tracker does when given")
     ap.add_argument("--tracked", action="store_true",
-                    help="track each clip with the template and with the fitted shape (the tracker's "
-                         "own shape fit) and compare joints within 10 cm")
+                    help="track each clip ('hc+ep') as --bodies says and compare joints within 10 cm")
+    ap.add_argument("--bodies", default=",".join(BODIES),
+                    help="with --tracked, comma-separated: average (the template's build filmed the "
+                         "same way), template (the random person, no shape fit), fitted (shape fit "
+                         "on), oracle (tracked with the person's true body)")
+    ap.add_argument("--start", type=float, default=None,
+                    help="clip start (s) with --tracked; default the motion's busiest --seconds")
     ap.add_argument("--seconds", type=float, default=2.0, help="clip length with --tracked")
     ap.add_argument("--first-person", type=int, default=0, help="first shape seed with --tracked")
     args = ap.parse_args(argv)

@@ -166,7 +166,8 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         The fitted body (``body`` itself when too few frames had a person: ``info`` says so).
     info : dict
         ``fitted`` (bool), ``frames_tracked``, ``frames_used``, ``seconds`` (tracking and
-        fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``.
+        fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
+        a pose, ``start_pose``: its pose (48 floats) refined with the fitted body.
     """
     from .shape_fit import fit_shape
     from .tracker import Tracker
@@ -199,4 +200,9 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
                     fit_scale=fit_scale, log=log)
     info.update(fitted=True, frames_used=index, **fit.to_dict())
     info.update(fit_seconds=info.pop("seconds"), seconds=round(time.perf_counter() - t0, 2))
+    if index[0] == 0:
+        # the first frame's pose, refined with the fitted body: the re-track starts from it
+        # and so keeps the trial's front/back decision (re-deciding it with a body a few
+        # millimetres different flipped whole tracks on near-ties; README "Body shape")
+        info["start_pose"] = fit.poses[0].tolist()
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info

@@ -88,7 +88,9 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
     With the shape fit (on sequences of at least :attr:`ShapeSettings.frames` frames)
     the first :attr:`ShapeSettings.frames` frames are tracked twice:
     once with the template to fit the shape, then, like every frame, with the fitted body
-    (so no frame's pose belongs to another body). Its time is in ``timings["shape_fit_s"]``.
+    (so no frame's pose belongs to another body), starting from the trial's frame-0 pose
+    as the fit refined it (the trial's automatic start and front/back check carry over).
+    Its time is in ``timings["shape_fit_s"]``.
     """
     init_pose = None
     settings = settings or TrackerSettings()
@@ -104,8 +106,12 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         body, shape_info = fit_body_shape((seq.depth(i) for i in range(n)), body, seq.camera,
                                           fps=seq.fps, settings=settings, segmenter=segmenter,
                                           fit_scale=not seq.subject_height)
+    start_pose = shape_info.pop("start_pose", None)
     if init_from_groundtruth:
         init_pose = fit_pose_to_joints(body, seq.joints[0])
+    elif start_pose is not None:
+        # the trial track already started (and checked front/back) on frame 0
+        init_pose = np.array(start_pose)
     with Tracker(body, seq.camera, method=method, likelihood=likelihood, fps=seq.fps,
                  settings=settings, segmenter=segmenter, detector=detector) as tracker:
         t0 = time.perf_counter()
@@ -120,7 +126,9 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "likelihood": likelihood,
         "init_from_groundtruth": bool(init_from_groundtruth),
         "initialisation": ("ground truth of frame 0 (ABLATION: --init-from-groundtruth)"
-                           if init_from_groundtruth else "automatic (no ground truth used)"),
+                           if init_from_groundtruth else "automatic (no ground truth used)"
+                           + ("; the re-track after the shape fit starts from the trial "
+                              "track's frame-0 pose" if init_pose is not None else "")),
         "initialisation_details": info["initialisation"],
         "body_height_m": round(float(body.height), 3) if shape_info["fitted"] else height["height_m"],
         "body_height_source": source,
