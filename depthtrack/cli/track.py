@@ -107,8 +107,9 @@ def _settings(args):
     from ..track.settings import TrackerSettings
 
     s = TrackerSettings()
-    if args.settings is not None:
-        data, path = read_json_source(args.settings, "tracker settings")
+    given = getattr(args, "settings", None)
+    if given is not None:
+        data, path = read_json_source(given, "tracker settings")
         if isinstance(data, dict) and isinstance(data.get("settings"), dict):
             data = data["settings"]                     # a track's summary.json
         if not isinstance(data, dict):
@@ -117,7 +118,7 @@ def _settings(args):
             s = TrackerSettings(**data)         # groups, and the flat names summary.json keeps
         except InputError as exc:
             raise InputError(path, exc.problem) from None
-    if args.shape_fit is not None:
+    if getattr(args, "shape_fit", None) is not None:
         s = s.replace(shape=dataclasses.replace(s.shape, enabled=args.shape_fit == "on"))
     return s
 
