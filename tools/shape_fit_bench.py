@@ -150,21 +150,28 @@ def summarise_tracked(rows, bodies):
     return out
 
 
-def main_tracked(args, motions):
+def each_person(args, motions, run_one):
+    """``(k, row)`` for people ``--first-person`` on, ``run_one(k, motion)`` each; the motions
+    cycle from the first person's, and one our BVH reader cannot map is skipped (and said so)."""
     from depthtrack.errors import InputError
 
-    bodies = [b for b in BODIES if b in args.bodies.split(",")]
-    rows, m = [], args.first_person      # the motions cycle from the first person's
+    m = args.first_person
     for k in range(args.first_person, args.first_person + args.people):
-        while True:               # motions our BVH reader cannot map are skipped (and said so)
+        while True:
             motion = motions[m % len(motions)]
             m += 1
             try:
-                row = run_tracked(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.seconds,
-                                  args.start, bodies)
+                yield k, run_one(k, motion)
                 break
             except InputError as exc:
                 print(f"skipped {motion.name}: {exc}", file=sys.stderr)
+
+
+def main_tracked(args, motions):
+    bodies = [b for b in BODIES if b in args.bodies.split(",")]
+    rows = []
+    for k, row in each_person(args, motions, lambda k, motion: run_tracked(
+            k, motion, CAMERAS[k % 2], args.out, args.clothing, args.seconds, args.start, bodies)):
         rows.append(row)
         args.out.mkdir(parents=True, exist_ok=True)     # each person's row as it comes (long runs)
         with open(args.out / "rows.jsonl", "a", encoding="utf-8") as f:
@@ -256,20 +263,11 @@ def main(argv=None):
     motions = [args.data / m for m in split[args.split]]
     if args.tracked:
         return main_tracked(args, motions)
-    from depthtrack.errors import InputError
-
-    rows, m = [], args.first_person      # the motions cycle from the first person's
-    for k in range(args.first_person, args.first_person + args.people):
-        while True:               # motions our BVH reader cannot map are skipped (and said so)
-            motion = motions[m % len(motions)]
-            m += 1
-            try:
-                row = run_person(k, motion, CAMERAS[k % 2], args.out, args.clothing, args.frames,
-                                 args.fit_frames, args.prior_weight, args.tile or None,
-                                 args.rounds, args.max_iterations, not args.keep_height)
-                break
-            except InputError as exc:
-                print(f"skipped {motion.name}: {exc}", file=sys.stderr)
+    rows = []
+    for k, row in each_person(args, motions, lambda k, motion: run_person(
+            k, motion, CAMERAS[k % 2], args.out, args.clothing, args.frames, args.fit_frames,
+            args.prior_weight, args.tile or None, args.rounds, args.max_iterations,
+            not args.keep_height)):
         rows.append(row)
         b = np.abs(list(row["template_errors_m"].values()))
         a = np.abs(list(row["fitted_errors_m"].values()))
