@@ -69,6 +69,20 @@ def swapped_twin(body, pose):
     return fit_joints(body, joints[SIDES_SWAPPED], turned_pose(pose))
 
 
+def root_from_joints(body, target, ids):
+    """A pose ``(48,)`` with every joint at zero and the root placed by Kabsch so the
+    joints ``ids`` of the rest pose best match ``target[ids]`` (``target (15, 3)``)."""
+    from ..motion.retarget import best_rotation
+
+    ids = list(ids)
+    rest = np.asarray(body.joint_positions(np.zeros(body.dof)))
+    R = best_rotation(rest[ids] - rest[ids].mean(0), target[ids] - target[ids].mean(0))
+    x0 = np.zeros(body.dof)
+    x0[3:6] = matrix_to_rotvec(R[None])[0]
+    x0[0:3] = target[ids].mean(0) - R @ rest[ids].mean(0)
+    return x0
+
+
 def fit_joints(body, target, x0, iterations: int = 15, regularisation: float = 0.01,
                weights=None):
     """Levenberg-Marquardt from ``x0 (48,)`` to a pose whose joints match ``target (15, 3)``.

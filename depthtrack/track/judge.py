@@ -96,14 +96,14 @@ def judge_frame(state, cost: float, reason, settings, found=None):
     return {"lost": lost}, {"lost": True}
 
 
-def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained"):
+def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained", off=None):
     """Global search on ``frame``; taken when it explains more than the tracked ``x``.
 
     ``previous (48,)``: the last frame's pose, whose heading and body axis the search prefers
     -- unless ``reason`` is ``"proposals"``: then the track's orientation is what is in
     doubt, the search starts as a first frame does, and its pose is taken when the proposals
     disagree with it less and it leaves at most :attr:`ProposalSettings.accept_margin` more
-    of the observation unexplained.
+    of the observation unexplained (``off``: ``x``'s disagreeing share, :func:`proposal_check`).
 
     Returns
     -------
@@ -129,9 +129,8 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
     tracker.recorder.count("recoveries_tried")
     if doubted:
         p = tracker.settings.propose
-        off_x, _ = proposal_check(tracker, frame, x, 0)
         off_y, _ = proposal_check(tracker, frame, y, 0)
-        better = off_y < off_x and y_cost < cost + p.accept_margin
+        better = off_y < off and y_cost < cost + p.accept_margin
     else:
         better = y_cost < cost
     if better:

@@ -23,9 +23,7 @@ import numpy as np
 
 from ..contract import JOINT_INDEX, JOINT_NAMES
 from ..detect.parts import Detection
-from ..motion.retarget import best_rotation
-from ..rotations import matrix_to_rotvec
-from .heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints
+from .heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints, root_from_joints
 
 #: Joints the judge checks: the recogniser finds them reliably, side-free.
 TRUNK = ("head", "neck", "pelvis", "l_shoulder", "r_shoulder")
@@ -110,11 +108,7 @@ def pose_from_joints(body, target, weights):
     root = ROOT_JOINTS[w[ROOT_JOINTS] > 0]
     if len(root) < 3:
         return None
-    rest = np.asarray(body.joint_positions(np.zeros(body.dof)))
-    R = best_rotation(rest[root] - rest[root].mean(0), target[root] - target[root].mean(0))
-    x0 = np.zeros(body.dof)
-    x0[3:6] = matrix_to_rotvec(R[None])[0]
-    x0[0:3] = target[root].mean(0) - R @ rest[root].mean(0)
+    x0 = root_from_joints(body, target, root)
     return fit_joints(body, np.where(w[:, None] > 0, target, 0.0), x0, weights=w)
 
 

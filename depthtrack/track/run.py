@@ -6,7 +6,6 @@ import time
 
 import numpy as np
 
-from ..body.rotations import matrix_to_rotvec
 from ..body.skeleton import TORSO_CONTRACT_JOINTS
 from ..contract import JOINT_INDEX
 from ..errors import InputError
@@ -32,20 +31,16 @@ def fit_pose_to_joints(body, joints, regularisation: float = 0.01):
     """
     from scipy.optimize import least_squares
 
-    from ..motion.retarget import best_rotation
+    from .heading import root_from_joints
 
     target = np.asarray(joints, dtype=np.float64)
     known = np.all(np.isfinite(target), axis=1)
     if known.sum() < 4:
         raise InputError(None, "ground truth has fewer than 4 known joints in the first frame")
-    rest = np.asarray(body.joint_positions(np.zeros(body.dof)))
     torso = [i for i in TORSO if known[i]]
     if len(torso) < 3:
         torso = list(np.flatnonzero(known))
-    R = best_rotation(rest[torso] - rest[torso].mean(0), target[torso] - target[torso].mean(0))
-    x0 = np.zeros(body.dof)
-    x0[3:6] = matrix_to_rotvec(R)
-    x0[0:3] = target[torso].mean(0) - R @ rest[torso].mean(0)
+    x0 = root_from_joints(body, target, torso)
 
     def residual(p):
         d = (np.asarray(body.joint_positions(p)) - target)[known].ravel()

@@ -250,7 +250,7 @@ class Tracker:
         off, misses = proposal_check(self, frame, x, state.proposal_misses)
         reason = found = loss_reason(cost, recent, s, misses) if self.method != "ep" else None
         if reason is not None:
-            recovered, x, cost = recover(self, energy, frame, x_prev, x, cost, reason)
+            recovered, x, cost = recover(self, energy, frame, x_prev, x, cost, reason, off)
             if recovered:
                 off, misses = proposal_check(self, frame, x, 0)
                 reason = loss_reason(cost, recent, s, misses)
