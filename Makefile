@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench benchmark benchmark-wide benchmark-quick sysdeps clean
+.PHONY: demo test bench benchmark benchmark-wide benchmark-parity benchmark-quick sysdeps clean
 
 $(STAMP): pyproject.toml
 	@$(MAKE) --no-print-directory sysdeps
@@ -44,6 +44,10 @@ benchmark: $(STAMP)
 benchmark-wide: $(STAMP)
 	$(PY) tools/benchmark.py --split dev --wide --out benchmark-output
 	$(PY) tools/benchmark.py --split test --wide --out benchmark-output
+
+# Cameras and azimuths compared, hc+ep against hc, and where the time goes (dev split).
+benchmark-parity: $(STAMP)
+	$(PY) tools/benchmark.py --split dev --parity --keep-tracks --out benchmark-output
 
 benchmark-quick: $(STAMP)
 	$(PY) tools/benchmark.py --split dev --quick --out benchmark-output

@@ -56,3 +56,24 @@ def test_mean_and_spread_over_seeds(tool):
     assert o["within_10cm"]["mean"] == pytest.approx(0.6) and o["within_10cm"]["std"] == pytest.approx(0.1)
     assert o["worst_group_within_10cm"] == pytest.approx(0.4) and o["fps_min"] == 2.0
     assert o["marker_mean_error_m"]["mean"] is None
+
+
+def test_parity_table_per_condition_and_time_breakdown(tool):
+    def seq(motion, label, seed_index, within, render_ms):
+        m = {"within_10cm": within, "fps": 1.0 + seed_index}
+        t = {"per_frame_ms": {"render": render_ms, "search": 100.0}, "init_s": 5.0, "fps": 1.0}
+        return {"motion": motion, "condition_label": label, "seed_index": seed_index,
+                "metrics": {"hc+ep": m}, "timings": {"hc+ep": t}}
+
+    sequences = [seq("a", "sr4000, az 0", 0, 0.9, 600), seq("b", "sr4000, az 0", 0, 0.7, 800),
+                 seq("a", "sr4000, az 0", 1, 0.5, 700), seq("b", "sr4000, az 0", 1, 0.5, 700),
+                 seq("a", "sr4000, az 180", 0, 0.2, 700)]
+    rows = tool.by_condition(sequences, ["hc+ep"])
+    assert [r["condition"] for r in rows] == ["sr4000, az 0", "sr4000, az 180"]
+    front = rows[0]["methods"]["hc+ep"]
+    # per seed: (0.9 + 0.7) / 2 = 0.8 and (0.5 + 0.5) / 2 = 0.5 -> 0.65 +- 0.15
+    assert front["within_10cm"]["mean"] == pytest.approx(0.65)
+    assert front["within_10cm"]["std"] == pytest.approx(0.15) and front["fps_min"] == 1.0
+    times = tool.time_breakdown(sequences, ["hc+ep"])["hc+ep"]
+    assert times["per_frame_ms"]["render"] == pytest.approx(700.0) and times["tracks"] == 5
+    assert tool.time_breakdown([{**s, "timings": None} for s in sequences], ["hc+ep"]) == {}

@@ -19,7 +19,11 @@ with every command line that made them.
 
 Presets: ``--wide`` takes every motion of the split, each under one of the quick
 preset's three conditions in turn, three seeds, 2 s clips, ``hc+ep``: every motion seen,
-in about 40 minutes per split on two idle cores. ``--quick`` takes three motions of the split (two mocap clips and one procedural
+in about 40 minutes per split on two idle cores. ``--parity`` takes the quick preset's
+three motions under every condition of :data:`CONDITIONS_PARITY` (the three cameras from
+the front, SR4000 from 90, 180 and 270 degrees), ``hc+ep`` and ``hc``, and adds a table per
+condition and method (mean over the motions): camera and azimuth parity, ``hc+ep`` against
+``hc``. ``--quick`` takes three motions of the split (two mocap clips and one procedural
 motion), one condition each (SR4000 from the front, Kinect v2 from 120 degrees, Azure
 NFOV from 240 degrees), three seeds, 2 s clips and ``hc+ep`` only: a few minutes on two
 cores. The full preset (default) takes every motion of the split under six conditions
@@ -65,8 +69,20 @@ CONDITIONS_QUICK = [
     {"camera": "kinect-v2", "azimuth": 120},
     {"camera": "azure-nfov", "azimuth": 240},
 ]
+#: The parity preset: each motion under every camera from the front, and SR4000 from all
+#: round (the goals: the other cameras at least as accurate as SR4000; every azimuth within
+#: 5 points of the frontal view).
+CONDITIONS_PARITY = [
+    {"camera": "sr4000", "azimuth": 0},
+    {"camera": "kinect-v2", "azimuth": 0},
+    {"camera": "azure-nfov", "azimuth": 0},
+    {"camera": "sr4000", "azimuth": 90},
+    {"camera": "sr4000", "azimuth": 180},
+    {"camera": "sr4000", "azimuth": 270},
+]
 PRESETS = {
     "full": {"seconds": 4.0, "seeds": 3, "methods": "hc+ep,hc", "clips": None},
+    "parity": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep,hc", "clips": 3},
     "quick": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep", "clips": 3},
     "wide": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep", "clips": None},
 }
@@ -167,6 +183,48 @@ def _stats(values) -> dict:
     return {"mean": float(v.mean()), "std": float(v.std()), "n": int(len(v))}
 
 
+def track_timings(folder: Path):
+    """A kept track's ``timings`` from its ``summary.json`` (None when unreadable)."""
+    try:
+        return json.loads((folder / "summary.json").read_text(encoding="utf-8"))["timings"]
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def by_condition(sequences: list, methods: list) -> list:
+    """Per condition and method: the mean over motions of ``within_10cm`` and its spread over
+    seeds (the mean over the condition's motions per seed index), and the slowest fps."""
+    rows = []
+    for label in dict.fromkeys(s["condition_label"] for s in sequences):
+        items = [s for s in sequences if s["condition_label"] == label]
+        row = {"condition": label, "motions": sorted({s["motion"] for s in items}), "methods": {}}
+        for m in methods:
+            by_seed = {}
+            for s in items:
+                by_seed.setdefault(s["seed_index"], []).append(s["metrics"][m]["within_10cm"])
+            row["methods"][m] = {"within_10cm": _stats(float(np.mean(v)) for v in by_seed.values()),
+                                 "fps_min": min(s["metrics"][m]["fps"] for s in items)}
+        rows.append(row)
+    return rows
+
+
+def time_breakdown(sequences: list, methods: list) -> dict:
+    """Per method: mean milliseconds per frame of each stage over the kept tracks, the start
+    (``init_s``) and the slowest and mean fps; {} without kept tracks."""
+    out = {}
+    for m in methods:
+        ts = [s["timings"][m] for s in sequences if (s.get("timings") or {}).get(m)]
+        if not ts:
+            continue
+        stages = dict.fromkeys(k for t in ts for k in t["per_frame_ms"])
+        out[m] = {"per_frame_ms": {k: float(np.mean([t["per_frame_ms"].get(k, 0.0) for t in ts]))
+                                   for k in stages},
+                  "init_s": float(np.mean([t["init_s"] for t in ts])),
+                  "fps_mean": float(np.mean([t["fps"] for t in ts])),
+                  "fps_min": float(min(t["fps"] for t in ts)), "tracks": len(ts)}
+    return out
+
+
 def aggregate(sequences: list, methods: list) -> tuple:
     """Per (motion, condition) group and overall statistics over seeds."""
     groups = {}
@@ -221,6 +279,23 @@ def markdown(report: dict) -> str:
         out.append(f"| {m} | {_pct(o['within_10cm'])} | {_cm(o['mean_error_m'])} | {_cm(o['max_error_m'])} | "
                    f"{_cm(o['marker_mean_error_m'])} | {o['fps']['mean']:.2f} | "
                    f"{100 * o['worst_group_within_10cm']:.0f}% | {o['fps_min']:.2f} |")
+    if report.get("by_condition") and len(report["by_condition"]) > 1:
+        out += ["", "## Per condition (mean over the motions; ± = spread over seeds)", "",
+                "| condition | " + " | ".join(f"{m} within 10 cm" for m in methods) + " |",
+                "|---|" + "---:|" * len(methods)]
+        for r in report["by_condition"]:
+            out.append(f"| {r['condition']} | " + " | ".join(
+                _pct(r["methods"][m]["within_10cm"]) for m in methods) + " |")
+    if report.get("time_breakdown"):
+        stages = list(dict.fromkeys(k for t in report["time_breakdown"].values()
+                                    for k in t["per_frame_ms"]))
+        out += ["", "## Where the time goes (mean ms per frame over the kept tracks; start apart)", "",
+                "| method | start (s) | " + " | ".join(stages) + " | fps mean | fps slowest |",
+                "|---|---:|" + "---:|" * (len(stages) + 2)]
+        for m, t in report["time_breakdown"].items():
+            out.append(f"| {m} | {t['init_s']:.1f} | " + " | ".join(
+                f"{t['per_frame_ms'].get(k, 0.0):.0f}" for k in stages) +
+                f" | {t['fps_mean']:.2f} | {t['fps_min']:.2f} |")
     out += ["", "## Per motion and condition (mean ± spread over seeds)", "",
             "| motion | condition | method | within 10 cm | mean error (cm) | max error (cm) | slowest fps |",
             "|---|---|---|---:|---:|---:|---:|"]
@@ -255,6 +330,8 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="the quick preset (minutes; see above)")
     parser.add_argument("--wide", action="store_true",
                         help="every motion of the split, one condition each (see above)")
+    parser.add_argument("--parity", action="store_true",
+                        help="cameras and azimuths compared on a few motions, hc+ep and hc (see above)")
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data"),
                         help="where the split's mocap clips are (default ../shared/data)")
     parser.add_argument("--out", default="benchmark-output", help="output folder (default benchmark-output)")
@@ -269,10 +346,11 @@ def main(argv=None) -> int:
                         help="also keep every track (OUT/SPLIT/tracks/SEQUENCE/METHOD/), to look at the failures")
     args = parser.parse_args(argv)
 
-    if args.quick and args.wide:
-        print("benchmark: choose --quick or --wide, not both", file=sys.stderr)
+    if args.quick + args.wide + args.parity > 1:
+        print("benchmark: choose one of --quick, --wide and --parity", file=sys.stderr)
         return 2
-    preset_name = "quick" if args.quick else "wide" if args.wide else "full"
+    preset_name = ("quick" if args.quick else "wide" if args.wide else "parity" if args.parity
+                   else "full")
     one_each = args.quick or args.wide
     preset = dict(PRESETS[preset_name])
     seconds = args.seconds or preset["seconds"]
@@ -292,7 +370,8 @@ def main(argv=None) -> int:
         motions = [m for m in motions if m[0] in wanted]
     elif preset["clips"]:
         motions = quick_subset(motions, preset["clips"])
-    conditions = CONDITIONS_QUICK if one_each else CONDITIONS_FULL
+    conditions = (CONDITIONS_QUICK if one_each else CONDITIONS_PARITY if args.parity
+                  else CONDITIONS_FULL)
     out = Path(args.out).resolve() / args.split
     seq_dir = out / "sequences"
     seeds = list(range(1, n_seeds + 1))
@@ -322,12 +401,16 @@ def main(argv=None) -> int:
         if args.keep_tracks:
             evaluate += ["--tracks-out", shown(out / "tracks"), "--force"]
         result = json.loads(run_depthtrack(evaluate))["sequences"]
-        return [{"name": seq_name, "motion": name, "kind": kind, "source": source,
-                 "condition": cond, "condition_label": condition_label(cond),
-                 "seed": seed, "seed_index": s_index, "start_s": start,
-                 "synth_command": shlex.join(synth), "eval_command": shlex.join(evaluate),
-                 "metrics": {m: result[seq_name][m] for m in methods}}
-                for seq_name, path, synth, seed, s_index in group]
+        records = [{"name": seq_name, "motion": name, "kind": kind, "source": source,
+                    "condition": cond, "condition_label": condition_label(cond),
+                    "seed": seed, "seed_index": s_index, "start_s": start,
+                    "synth_command": shlex.join(synth), "eval_command": shlex.join(evaluate),
+                    "metrics": {m: result[seq_name][m] for m in methods}}
+                   for seq_name, path, synth, seed, s_index in group]
+        if args.keep_tracks:
+            for r in records:
+                r["timings"] = {m: track_timings(out / "tracks" / r["name"] / m) for m in methods}
+        return records
 
     tasks = [(name, kind, source, start, cond) for name, kind, source, start, conds in plan for cond in conds]
     results, done = {}, 0
@@ -355,6 +438,8 @@ def main(argv=None) -> int:
         "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0, "jobs": args.jobs,
         "motions": [{"name": n, "kind": k, "source": s, "start_s": st} for n, k, s, st, _ in plan],
         "conditions": conditions, "sequences": sequences, "groups": groups, "overall": overall,
+        "by_condition": by_condition(sequences, methods),
+        "time_breakdown": time_breakdown(sequences, methods),
     }
     write_text_atomic(out / "report.json", json.dumps(report, indent=1) + "\n")
     write_text_atomic(out / "report.md", markdown(report))
