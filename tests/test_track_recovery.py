@@ -8,7 +8,9 @@ from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.io import open_sequence
 from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import SIDES_SWAPPED, recheck_heading, swapped_twin, turned_pose
+from depthtrack.track.heading import (SIDES_SWAPPED, facing_direction, flip_search, recheck_heading,
+                                      search_switch, sort_by_heading, swapped_twin,
+                                      swapped_twins, turned_pose)
 from depthtrack.track.judge import judge_frame
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
@@ -39,6 +41,21 @@ def test_swapped_twin_keeps_the_joints_and_faces_the_other_way():
     fa = rotvec_to_matrix(x[3:6]) @ MODEL_FORWARD
     fb = rotvec_to_matrix(y[3:6]) @ MODEL_FORWARD
     assert fa @ fb < -0.9
+    # the fit from the rest pose lands on the same joints, facing the other way too
+    both = swapped_twins(body, x, ("turned", "rest"))
+    assert both.shape == (2, 48) and np.allclose(both[0], y)
+    c = np.asarray(body.joint_positions(both[1]))
+    assert np.abs(c - a[SIDES_SWAPPED]).max() < 0.03
+    assert facing_direction(both[1]) @ fa < -0.9
+
+
+def test_search_results_count_for_the_heading_they_have():
+    x = np.zeros(48)
+    turned = turned_pose(x)
+    # a search asked for the other heading that came back facing the same way counts there
+    flipped, e_flipped, e_same = sort_by_heading(x, 500.0, [(x + 0.01, 450.0), (turned, 470.0)])
+    assert np.array_equal(flipped, turned) and e_flipped == 470.0 and e_same == 450.0
+    assert sort_by_heading(x, 500.0, [(x, 520.0)]) == (None, None, 500.0)
 
 
 def test_recheck_switches_after_enough_votes_only():
@@ -108,6 +125,41 @@ def test_a_mirrored_start_is_corrected_while_tracking(squat):
             heading=TrackerSettings().heading.__class__(every=0))) as tracker:
         stuck = _errors(tracker.track_sequence(squat, init_pose=x0).joints, truth)
     assert stuck[-5:].min() > 0.25
+
+
+def test_flip_search_asks_for_the_other_heading_and_switches_on_a_clear_lead_only():
+    pose = np.zeros(48)
+    pose[3:6] = [0.0, 0.7, 0.0]
+    asked = []
+    flip_search(lambda heading, axis: asked.append((heading, axis)) or (pose, 0.0), pose)
+    heading, axis = asked[0]
+    assert heading @ facing_direction(pose) == pytest.approx(-1.0)
+    assert np.linalg.norm(axis) == pytest.approx(1.0) and abs(axis @ heading) < 1e-9
+    s = TrackerSettings()
+    pixels = 1000.0
+    state = TrackingState(log=({},) * 7)
+    margin = s.heading.search_margin * pixels
+    taken, changes = search_switch(state, 500.0, pose + 1, 500.0 - 0.9 * margin, pixels, s)
+    assert taken is None and changes == {}
+    taken, changes = search_switch(state, 500.0, pose + 1, 500.0 - 1.1 * margin, pixels, s)
+    assert np.array_equal(taken, pose + 1)
+    assert changes["heading_switches"][-1]["by"] == "search"
+    assert changes["heading_switches"][-1]["frame"] == 7
+
+
+def test_a_mirrored_start_is_corrected_by_the_flip_search(squat):
+    """With the twin recheck off, the periodic flip search alone turns a mirrored track."""
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
+    heading = TrackerSettings().heading.__class__(every=0, search_every=5)
+    with Tracker(body, squat.camera, settings=TrackerSettings(heading=heading)) as tracker:
+        result = tracker.track_sequence(squat, init_pose=x0)
+        switches = tracker.describe()["heading_switches"]
+    err = _errors(result.joints, truth)
+    assert err[0] > 0.25
+    assert switches and switches[0]["by"] == "search" and switches[0]["frame"] <= 10
+    assert err[switches[0]["frame"]:].max() < 0.1
 
 
 def test_loss_bookkeeping_opens_closes_and_gives_up():

@@ -19,7 +19,7 @@ _EPILOG = """methods (the ToF paper's experiments):
 examples:
   depthtrack track seq_walk -o track_walk
   depthtrack track seq_walk -o track_walk --method hc --likelihood pixel --overlay walk.mp4
-  depthtrack track seq_walk -o track_walk --shape-fit on       # fit the person's proportions
+  depthtrack track seq_walk -o track_walk --shape-fit off      # keep the template's proportions
   depthtrack track seq_walk -o track_walk --settings '{"heading": {"every": 8}}'
   depthtrack track recording.mkv -o track_kinect
   depthtrack track realsense.bag -o track_rs --topic /device_0/sensor_0/Depth_0/image/data
@@ -32,10 +32,10 @@ OUT gets joints.csv, poses.npz, track.bvh, body.json (the fitted body: height, s
 segment lengths; depthtrack.BodyModel.from_json reads it) and summary.json (method,
 settings, body height and where it came from, the shape fit, timings per stage, frames per
 second). The body height is read from sequence.json (subject.height_m), or else fitted to
-the first frame with a person by the likelihood (a few seconds). With --shape-fit on the
-person's proportions and girth are then fitted to four of the first 16 frames, tracked
-with the template, and the whole sequence is tracked with the fitted body (off by default:
-on the dev motions it did not track better; see the README, "Body shape"). After the automatic start, the pose and its twin facing
+the first frame with a person by the likelihood (a few seconds). Then the person's
+proportions and girth are fitted to four of the first 16 frames, tracked with the
+template, and the whole sequence is tracked with the fitted body (--shape-fit off keeps
+the template's proportions; see the README, "Body shape"). After the automatic start, the pose and its twin facing
 the other way are both tracked for ten frames and the better kept (a depth image barely
 tells front from back). Frames without a person (an empty room, the subject gone) get no
 pose; tracking starts again when someone appears. --export also writes OUT/exports/
@@ -63,8 +63,8 @@ def register(subparsers) -> None:
                    help="ABLATION ONLY: start from a pose fitted to the ground-truth joints of "
                         "frame 0 instead of the automatic initialisation (recorded in summary.json)")
     p.add_argument("--shape-fit", choices=("on", "off"), default=None,
-                   help="on: fit the body's shape (segment lengths, widths, girth) to the first "
-                        "16 frames before tracking; off (default): the template's proportions")
+                   help="on (default): fit the body's shape (segment lengths, widths, girth) to "
+                        "the first 16 frames before tracking; off: the template's proportions")
     p.add_argument("--settings", metavar="JSON", default=None,
                    help="tracker settings, a file or JSON text: an object of setting groups as summary.json's "
                         "\"settings\" holds them (only the fields to change, e.g. "

@@ -23,8 +23,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
-from ..body.skeleton import MODEL_UP
+from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..contract import JOINT_INDEX, JOINT_NAMES
+from .settings import TWIN_STARTS
 
 
 def turned_pose(pose):
@@ -67,6 +68,35 @@ def swapped_twin(body, pose):
     pose = np.asarray(pose, dtype=np.float64)
     joints = np.asarray(body.joint_positions(pose))
     return fit_joints(body, joints[SIDES_SWAPPED], turned_pose(pose))
+
+
+#: Joints that fix the root of a pose fitted to joint positions (Kabsch): the trunk's.
+TRUNK_ROOT_JOINTS = [JOINT_INDEX[n] for n in ("head", "neck", "pelvis", "l_shoulder",
+                                              "r_shoulder", "l_hip", "r_hip")]
+
+
+def swapped_twins(body, pose, starts=TWIN_STARTS):
+    """``(K, 48)``: :func:`swapped_twin` fitted from each of ``starts`` (:data:`TWIN_STARTS`).
+
+    ``"turned"`` starts from the pose turned about its long axis (:func:`swapped_twin`),
+    ``"rest"`` from the rest pose placed by Kabsch on the trunk joints. The turned start
+    keeps the pose's joint angles, and a wrong-facing pose's twists and bends, carried over,
+    contort the twin: its joints land where they should, with the neck and spine bent and
+    the shoulders twisted, and the climb cannot undo that. The rest start fits the same
+    joints with every angle pulled toward zero.
+    """
+    pose = np.asarray(pose, dtype=np.float64)
+    target = np.asarray(body.joint_positions(pose))[SIDES_SWAPPED]
+    out = []
+    for start in starts:
+        if start == "turned":
+            x0 = turned_pose(pose)
+        elif start == "rest":
+            x0 = root_from_joints(body, target, TRUNK_ROOT_JOINTS)
+        else:
+            raise ValueError(f"unknown twin start {start!r}; choose from {', '.join(TWIN_STARTS)}")
+        out.append(fit_joints(body, target, x0))
+    return np.array(out).reshape(-1, len(pose))
 
 
 def root_from_joints(body, target, ids):
@@ -167,8 +197,9 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
         A pose climbed on this frame by the energy without the motion prior, and that
         energy. Both hypotheses are climbed alike: the tracked pose was fitted with the
         motion prior, and a twin fitted without it would win by that alone.
-    swapped_twin_of : callable ``(pose (48,)) -> (48,)``
-        The other-facing twin of a pose (:func:`swapped_twin`).
+    swapped_twin_of : callable ``(pose (48,)) -> (48,) or (K, 48)``
+        The other-facing twin of a pose (:func:`swapped_twin`), or several fits of it
+        (:func:`swapped_twins`): each is climbed, the lowest energy competes.
     pixels : float
         The foreground's pixel count (the margin's scale).
     settings : TrackerSettings
@@ -185,7 +216,8 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     if h.every <= 0 or state.frame % h.every:
         return pose, {}, False
     _, e_pose = refit(pose)
-    y, e_twin = refit(swapped_twin_of(pose))
+    fits = [refit(t) for t in np.asarray(swapped_twin_of(pose)).reshape(-1, len(pose))]
+    y, e_twin = min(fits, key=lambda f: float(f[1]))
     lead = (e_pose - float(e_twin)) / max(pixels, 1.0)
     evidence = max(0.0, state.heading_evidence + lead - h.evidence_drift)
     votes = state.heading_votes + 1 if lead > h.recheck_margin else 0
@@ -199,3 +231,67 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     return np.asarray(y, dtype=np.float64), {
         "heading_votes": 0, "heading_evidence": 0.0,
         "heading_switches": state.heading_switches + (switch,)}, True
+
+
+def facing_direction(pose):
+    """The body's forward direction ``(3,)`` of ``pose (48,)`` (its root's)."""
+    return rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3:6]) @ MODEL_FORWARD
+
+
+def flip_search(search, pose):
+    """The global search's best pose facing away from ``pose (48,)``'s heading.
+
+    ``search``: callable ``(heading (3,), body_axis (3,)) -> (pose (48,), energy)``, the global
+    search (:func:`~.start.global_search`) with its heading prior turned to ``heading`` and its
+    body-axis prior to ``body_axis``. The prior only prefers the other heading: where the
+    image clearly says otherwise the search may return a pose facing the same way.
+    Returns ``(pose (48,), energy)``.
+    """
+    R = rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3:6])
+    return search(-(R @ MODEL_FORWARD), R @ MODEL_UP)
+
+
+def sort_by_heading(pose, energy: float, found):
+    """The searches' poses sorted by the way they face, against the tracked ``pose (48,)``.
+
+    ``found``: ``[(pose (48,), energy)]``. A search that prefers one heading may still
+    return the other, so each result counts for the heading it has. Returns
+    ``(flipped (48,) or None, its energy, the best energy facing as pose does)``: the
+    lowest-energy result facing away from ``pose`` (None when none does), and the lowest of
+    ``energy`` and the results facing the same way.
+    """
+    forward = facing_direction(pose)
+    same = [float(energy)] + [float(e) for y, e in found if facing_direction(y) @ forward >= 0]
+    away = [(y, float(e)) for y, e in found if facing_direction(y) @ forward < 0]
+    if not away:
+        return None, None, min(same)
+    y, e = min(away, key=lambda f: f[1])
+    return y, e, min(same)
+
+
+def search_switch(state, e_pose: float, flipped, e_flipped: float, pixels: float, settings):
+    """The periodic flip search's decision (:class:`~.settings.HeadingSettings`).
+
+    Parameters
+    ----------
+    state : TrackingState
+        Before this frame is logged.
+    e_pose : float
+        The tracked pose's energy without the motion prior, climbed on this frame.
+    flipped : (48,) float
+        :func:`flip_search`'s pose; ``e_flipped`` its energy, the same energy.
+    pixels : float
+        The foreground's pixel count.
+
+    Returns ``(pose (48,) or None, changes for the state)``: the flipped pose when it takes
+    over (the switch recorded ``by: "search"``), else None.
+    """
+    lead = (e_pose - float(e_flipped)) / max(pixels, 1.0)
+    if lead <= settings.heading.search_margin:
+        return None, {}
+    switch = {"frame": state.frame, "energy_kept": round(float(e_pose), 1),
+              "energy_turned": round(float(e_flipped), 1), "by": "search",
+              "evidence": round(float(lead), 4)}
+    return np.asarray(flipped, dtype=np.float64), {
+        "heading_votes": 0, "heading_evidence": 0.0,
+        "heading_switches": state.heading_switches + (switch,)}

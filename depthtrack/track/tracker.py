@@ -39,10 +39,13 @@ import time
 import numpy as np
 
 from ..errors import InputError
+from ..body.rotations import rotvec_to_matrix
+from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
-from .heading import recheck_heading, swapped_twin, turned_pose
+from .heading import (flip_search, recheck_heading, search_switch, sort_by_heading,
+                      swapped_twins, turned_pose)
 from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
@@ -272,9 +275,43 @@ class Tracker:
             return climb(bare, self.climbers.start, pose, self.recorder,
                          passes=self.settings.heading.twin_passes)
 
+        pixels = float(np.count_nonzero(frame.foreground.mask))
         with self.recorder.timed("heading"):
-            return recheck_heading(state, x, refit, lambda p: swapped_twin(self.body, p),
-                                   float(np.count_nonzero(frame.foreground.mask)), self.settings)
+            y, changes, turned = recheck_heading(state, x, refit,
+                                                 self._twins, pixels,
+                                                 self.settings)
+        every = self.settings.heading.search_every
+        if turned or every <= 0 or state.frame % every:
+            return y, changes, turned
+        with self.recorder.timed("heading"):
+            _, e_x = refit(x)
+            searcher = self._flip_searcher(bare, frame)
+            found = [flip_search(searcher, x)]
+            if self.settings.heading.search_both:
+                # the same search effort for the kept heading: the flipped pose must beat the
+                # better fit of this heading too, not only the tracked pose
+                R = rotvec_to_matrix(x[3:6])
+                found.append(searcher(R @ MODEL_FORWARD, R @ MODEL_UP))
+            flipped, e_flipped, e_x = sort_by_heading(x, e_x, found)
+            if flipped is None:
+                return y, changes, False
+        taken, more = search_switch(state, e_x, flipped, e_flipped, pixels, self.settings)
+        if taken is None:
+            return y, changes, False
+        return taken, {**changes, **more}, True
+
+    def _twins(self, pose):
+        """The swapped twins of ``pose (48,)`` the heading checks climb, ``(K, 48)``
+        (:attr:`HeadingSettings.twin_starts`)."""
+        return swapped_twins(self.body, pose, self.settings.heading.twin_starts)
+
+    def _flip_searcher(self, energy, frame):
+        """``(heading, body_axis) -> (pose, energy)``: the global search on ``frame`` with
+        those priors (:func:`.heading.flip_search`)."""
+        def run(heading, body_axis):
+            x, e, _ = global_search(self, energy, frame, heading=heading, body_axis=body_axis)
+            return x, e
+        return run
 
     def track_through(self, state, depths):
         """``advance`` through ``depths``; ``(state, poses (K, 48), mean cost)``, or None when
@@ -293,11 +330,14 @@ class Tracker:
         def turn(pose):
             self.renderers.upload(frame)
             energy = self._energy(frame)
-            twin = (swapped_twin(self.body, pose) if self.settings.heading.start_twin == "swapped"
-                    else turned_pose(pose))
-            x, _ = climb(energy, self.climbers.start, twin, self.recorder,
-                         passes=self.settings.start.passes)
-            return x
+            kind = self.settings.heading.start_twin
+            if kind == "search":
+                x, _ = flip_search(self._flip_searcher(energy, frame), pose)
+                return x
+            twins = self._twins(pose) if kind == "swapped" else [turned_pose(pose)]
+            fits = [climb(energy, self.climbers.start, t, self.recorder,
+                          passes=self.settings.start.passes) for t in twins]
+            return min(fits, key=lambda f: float(f[1]))[0]
         return turn
 
     # ------------------------------------------------------------------ the classic interface
