@@ -140,12 +140,12 @@ def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_he
 
 
 def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segmenter=None,
-                   fit_scale: bool = True, log=None):
+                   fit_scale: bool = True, log=None, method: str = "hc"):
     """The body with the shape (and, with ``fit_scale``, the size) that explains the first
     frames best; no ground truth.
 
-    The frames are tracked ("hc", the automatic start and the front/back check included)
-    with ``body``; :attr:`ShapeSettings.fit_frames` of the frames that got a pose (spread
+    The frames are tracked (by ``method``, the automatic start and the front/back check
+    included) with ``body``; :attr:`ShapeSettings.fit_frames` of the frames that got a pose (spread
     evenly) go with the tracker's poses, their segmentation and floor plane to
     :func:`~.shape_fit.fit_shape` on the full mesh (the decimated one misplaces the
     forearm by centimetres).
@@ -159,6 +159,10 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     camera : Camera
     fit_scale : bool
         Also fit the size; False when the height is given.
+    method : {"hc", "hc+ep"}
+        The trial tracker's method. The re-track starts from the trial's frame-0 pose, so
+        a tracker that uses the part recogniser (``"hc+ep"``) should start the trial with
+        it too: its proposals join the start's candidates and judge the first frames.
 
     Returns
     -------
@@ -177,7 +181,7 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         from ..detect import segment_foreground as segmenter
     t0 = time.perf_counter()
     depths = [np.asarray(d, dtype=np.float32) for d in frames]
-    with Tracker(body, camera, method="hc", fps=fps, settings=settings,
+    with Tracker(body, camera, method=method, fps=fps, settings=settings,
                  segmenter=segmenter) as tracker:
         tracked = [(i, x) for i, x in tracker.stream(depths) if x is not None]
     info = {"fitted": False, "frames_tracked": len(depths)}

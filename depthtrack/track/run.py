@@ -98,9 +98,12 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         # a clip shorter than the fit's frames would be tracked twice over for little
         shape_info["reason"] = f"the sequence has {len(seq)} frames, the fit needs {n}"
     elif settings.shape.enabled:
+        # the trial starts as the track would (with the part recogniser unless "hc"); "ep"
+        # alone drifts, so its trial climbs too
         body, shape_info = fit_body_shape((seq.depth(i) for i in range(n)), body, seq.camera,
                                           fps=seq.fps, settings=settings, segmenter=segmenter,
-                                          fit_scale=not seq.subject_height)
+                                          fit_scale=not seq.subject_height,
+                                          method="hc" if method == "hc" else "hc+ep")
     start_pose = shape_info.pop("start_pose", None)
     if init_from_groundtruth:
         init_pose = fit_pose_to_joints(body, seq.joints[0])
