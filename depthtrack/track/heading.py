@@ -17,6 +17,11 @@ climbed on that frame, by the energy without the motion prior (the likelihood pl
 prior, which charges a twin for the bent-backwards joints it needs), and the twin takes
 over after :attr:`HeadingSettings.votes` clear wins in a row, or when its small wins add
 up (a CUSUM test, :class:`~.settings.HeadingSettings`).
+
+A twin is fitted to the exchanged joints from the pose turned half a turn and from the rest
+pose (:func:`swapped_twins`): the first carries a wrong-facing pose's bends and twists over,
+contorted; the lower-energy fit competes. Optionally (:func:`recheck_by_search`) the global
+search also looks for the best pose facing the other way every few frames.
 """
 from __future__ import annotations
 
@@ -295,3 +300,23 @@ def search_switch(state, e_pose: float, flipped, e_flipped: float, pixels: float
     return np.asarray(flipped, dtype=np.float64), {
         "heading_votes": 0, "heading_evidence": 0.0,
         "heading_switches": state.heading_switches + (switch,)}
+
+
+def recheck_by_search(state, pose, e_pose: float, search, pixels: float, settings):
+    """The periodic flip search of one frame (:attr:`HeadingSettings.search_every`).
+
+    ``search``: as :func:`flip_search`'s; ``e_pose``: the tracked ``pose (48,)``'s energy
+    without the motion prior, climbed on this frame. The search runs for the other heading
+    and, with :attr:`HeadingSettings.search_both`, for this one too (a fresh global search
+    beats a tracked pose by its effort alone, whichever way it faces); each result counts
+    for the heading it has (:func:`sort_by_heading`). Returns :func:`search_switch`'s
+    ``(pose (48,) or None, changes)``.
+    """
+    found = [flip_search(search, pose)]
+    if settings.heading.search_both:
+        R = rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3:6])
+        found.append(search(R @ MODEL_FORWARD, R @ MODEL_UP))
+    flipped, e_flipped, e_same = sort_by_heading(pose, e_pose, found)
+    if flipped is None:
+        return None, {}
+    return search_switch(state, e_same, flipped, e_flipped, pixels, settings)

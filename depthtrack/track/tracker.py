@@ -39,13 +39,10 @@ import time
 import numpy as np
 
 from ..errors import InputError
-from ..body.rotations import rotvec_to_matrix
-from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
-from .heading import (flip_search, recheck_heading, search_switch, sort_by_heading,
-                      swapped_twins, turned_pose)
+from .heading import flip_search, recheck_by_search, recheck_heading, swapped_twins, turned_pose
 from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
@@ -268,7 +265,8 @@ class Tracker:
         return state, x.copy()
 
     def _recheck_heading(self, state, energy, frame, x):
-        """:func:`.heading.recheck_heading` on this frame (coarse renderer, no motion prior)."""
+        """:func:`.heading.recheck_heading` on this frame (coarse renderer, no motion prior),
+        and every :attr:`HeadingSettings.search_every` frames :func:`.heading.recheck_by_search`."""
         bare = energy.without_prior()
 
         def refit(pose):
@@ -277,25 +275,15 @@ class Tracker:
 
         pixels = float(np.count_nonzero(frame.foreground.mask))
         with self.recorder.timed("heading"):
-            y, changes, turned = recheck_heading(state, x, refit,
-                                                 self._twins, pixels,
+            y, changes, turned = recheck_heading(state, x, refit, self._twins, pixels,
                                                  self.settings)
         every = self.settings.heading.search_every
         if turned or every <= 0 or state.frame % every:
             return y, changes, turned
         with self.recorder.timed("heading"):
             _, e_x = refit(x)
-            searcher = self._flip_searcher(bare, frame)
-            found = [flip_search(searcher, x)]
-            if self.settings.heading.search_both:
-                # the same search effort for the kept heading: the flipped pose must beat the
-                # better fit of this heading too, not only the tracked pose
-                R = rotvec_to_matrix(x[3:6])
-                found.append(searcher(R @ MODEL_FORWARD, R @ MODEL_UP))
-            flipped, e_flipped, e_x = sort_by_heading(x, e_x, found)
-            if flipped is None:
-                return y, changes, False
-        taken, more = search_switch(state, e_x, flipped, e_flipped, pixels, self.settings)
+            taken, more = recheck_by_search(state, x, e_x, self._flip_searcher(bare, frame),
+                                            pixels, self.settings)
         if taken is None:
             return y, changes, False
         return taken, {**changes, **more}, True
