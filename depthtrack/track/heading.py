@@ -70,9 +70,7 @@ def swapped_twin(body, pose):
     backwards where needed). Turning the pose (:func:`turned_pose`) would also turn every
     limb away from where the image shows it; exchanging the sides keeps them.
     """
-    pose = np.asarray(pose, dtype=np.float64)
-    joints = np.asarray(body.joint_positions(pose))
-    return fit_joints(body, joints[SIDES_SWAPPED], turned_pose(pose))
+    return swapped_twins(body, pose, ("turned",))[0]
 
 
 #: Joints that fix the root of a pose fitted to joint positions (Kabsch): the trunk's.
@@ -243,6 +241,11 @@ def facing_direction(pose):
     return rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3:6]) @ MODEL_FORWARD
 
 
+def long_axis(pose):
+    """The body's head direction ``(3,)`` of ``pose (48,)`` (its root's)."""
+    return rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3:6]) @ MODEL_UP
+
+
 def flip_search(search, pose):
     """The global search's best pose facing away from ``pose (48,)``'s heading.
 
@@ -252,8 +255,7 @@ def flip_search(search, pose):
     image clearly says otherwise the search may return a pose facing the same way.
     Returns ``(pose (48,), energy)``.
     """
-    R = rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3:6])
-    return search(-(R @ MODEL_FORWARD), R @ MODEL_UP)
+    return search(-facing_direction(pose), long_axis(pose))
 
 
 def sort_by_heading(pose, energy: float, found):
@@ -314,8 +316,7 @@ def recheck_by_search(state, pose, e_pose: float, search, pixels: float, setting
     """
     found = [flip_search(search, pose)]
     if settings.heading.search_both:
-        R = rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3:6])
-        found.append(search(R @ MODEL_FORWARD, R @ MODEL_UP))
+        found.append(search(facing_direction(pose), long_axis(pose)))
     flipped, e_flipped, e_same = sort_by_heading(pose, e_pose, found)
     if flipped is None:
         return None, {}

@@ -18,10 +18,9 @@ import time
 
 import numpy as np
 
-from ..body.rotations import rotvec_to_matrix
-from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..errors import InputError
 from ..likelihood import fixed_and_empty_costs
+from .heading import facing_direction, long_axis
 from .proposals import disagreement, frame_proposals
 from .start import global_search
 
@@ -113,15 +112,14 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
         Its unexplained share.
     """
     t = time.perf_counter()
-    R = rotvec_to_matrix(previous[3:6])
     energy = energy.without_prior()
     doubted = reason == "proposals"
     try:
         # the search prefers the last heading and the last body axis (a cartwheel's
         # upside-down body is no less likely there than an upright one)
         y, _, _ = global_search(tracker, energy, frame,
-                                heading=None if doubted else R @ MODEL_FORWARD,
-                                body_axis=None if doubted else R @ MODEL_UP)
+                                heading=None if doubted else facing_direction(previous),
+                                body_axis=None if doubted else long_axis(previous))
     except InputError:
         return False, x, cost
     y_cost = unexplained(energy, y)

@@ -23,14 +23,14 @@ import numpy as np
 
 from ..contract import JOINT_INDEX, JOINT_NAMES
 from ..detect.parts import Detection
-from .heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints, root_from_joints
+from .heading import (ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, TRUNK_ROOT_JOINTS, fit_joints,
+                      root_from_joints)
 
 #: Joints the judge checks: the recogniser finds them reliably, side-free.
 TRUNK = ("head", "neck", "pelvis", "l_shoulder", "r_shoulder")
 TRUNK_INDEX = np.array([JOINT_INDEX[n] for n in TRUNK])
-#: Joints that fix the root of a pose fitted to proposals (Kabsch).
-ROOT_JOINTS = np.array([JOINT_INDEX[n] for n in ("head", "neck", "pelvis", "l_shoulder",
-                                                 "r_shoulder", "l_hip", "r_hip")])
+#: Joints that fix the root of a pose fitted to proposals (Kabsch): the trunk's.
+ROOT_JOINTS = np.asarray(TRUNK_ROOT_JOINTS)
 #: Joint classes whose proposals may feed evidence propagation -> the parts (joint-centre
 #: parts of :class:`~.evidence.PartModel`) a proposal of that class may be, either side.
 JOINT_CLASSES = {c: ("l_" + c, "r_" + c) for c in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")}
