@@ -5,11 +5,14 @@ import pytest
 
 from depthtrack.body import BodyModel
 from depthtrack.body.skeleton import POSE_INDEX
+from depthtrack.contract import JOINT_NAMES
 from depthtrack.io import open_sequence
 from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import (SIDES_SWAPPED, facing_direction, flip_search, recheck_heading,
-                                      search_switch, sort_by_heading, swapped_twin,
+from depthtrack.track.heading import (LEGS_SWAPPED, SIDES_SWAPPED, facing_direction, fit_joints,
+                                      flip_search, limb_swapped_twins, recheck_heading,
+                                      recheck_limb_sides,
+                                      search_switch, settle_heading, sort_by_heading, swapped_twin,
                                       swapped_twins, turned_pose)
 from depthtrack.track.judge import judge_frame
 from depthtrack.track.state import TrackingState
@@ -56,6 +59,35 @@ def test_search_results_count_for_the_heading_they_have():
     flipped, e_flipped, e_same = sort_by_heading(x, 500.0, [(x + 0.01, 450.0), (turned, 470.0)])
     assert np.array_equal(flipped, turned) and e_flipped == 470.0 and e_same == 450.0
     assert sort_by_heading(x, 500.0, [(x, 520.0)]) == (None, None, 500.0)
+
+
+def test_the_start_check_keeps_the_heading_its_score_prefers():
+    start = TrackingState(pose=np.zeros(48), log=({},))
+    depths = [None] * 3
+    # the turned twin (pose all ones) leaves more unexplained but fits with lower energy
+    scores = {0.0: {"unexplained": 0.10, "energy": 1.20}, 1.0: {"unexplained": 0.11, "energy": 1.15}}
+
+    def track(state, frames):
+        return state, np.tile(state.pose, (len(frames), 1)), scores[float(state.pose[0])]
+
+    turn = lambda pose: pose + 1.0                       # noqa: E731
+    by_share = TrackerSettings()
+    assert by_share.heading.start_by == "unexplained"
+    state, poses = settle_heading(start, depths, track, turn, by_share)
+    check = state.init_info["heading_check"]
+    assert check["kept"] == "initial" and check["by"] == "unexplained" and not poses.any()
+    assert poses.shape == (4, 48) and check["energy_turned"] == 1.15
+    by_energy = TrackerSettings(heading={"start_by": "energy"})
+    state, poses = settle_heading(start, depths, track, turn, by_energy)
+    assert state.init_info["heading_check"]["kept"] == "turned" and (poses == 1.0).all()
+    # a lead within the margin keeps the start's heading
+    close = TrackerSettings(heading={"start_by": "energy", "energy_margin": 0.05})
+    state, _ = settle_heading(start, depths, track, turn, close)
+    assert state.init_info["heading_check"]["kept"] == "initial"
+    # the start's own track dropped: no decision
+    assert settle_heading(start, depths, lambda s, f: None, turn, by_share) is None
+    with pytest.raises(ValueError, match="start_by"):
+        TrackerSettings(heading={"start_by": "votes"})
 
 
 def test_recheck_switches_after_enough_votes_only():
@@ -125,6 +157,72 @@ def test_a_mirrored_start_is_corrected_while_tracking(squat):
             heading=TrackerSettings().heading.__class__(every=0))) as tracker:
         stuck = _errors(tracker.track_sequence(squat, init_pose=x0).joints, truth)
     assert stuck[-5:].min() > 0.25
+
+
+def test_limb_swapped_twins_exchange_one_pair_of_limbs_and_keep_the_trunk():
+    body = BodyModel.default(height=1.75)
+    pose = np.zeros(48)
+    pose[30], pose[33] = -0.7, 0.9                     # left hip forward, left knee bent
+    pose[12] = pose[21] = 1.2                          # both arms forward, hands in front,
+    pose[14], pose[23] = 0.5, -0.5                     # a forearm's length apart
+    pose[15] = -1.0                                    # left elbow bent
+    joints = np.asarray(body.joint_positions(pose))
+    twins = dict(limb_swapped_twins(body, pose))
+    assert set(twins) == {"legs", "arms"}
+    legs = np.asarray(body.joint_positions(twins["legs"]))
+    from depthtrack.contract import JOINT_INDEX as J
+    assert np.linalg.norm(legs[J["r_knee"]] - joints[J["l_knee"]]) < 0.03
+    assert np.linalg.norm(legs[J["l_ankle"]] - joints[J["r_ankle"]]) < 0.03
+    trunk = [J[n] for n in ("head", "neck", "pelvis", "l_shoulder", "r_shoulder", "l_elbow")]
+    assert np.abs(legs[trunk] - joints[trunk]).max() < 0.02
+    arms = np.asarray(body.joint_positions(twins["arms"]))
+    for side, other in (("r_wrist", "l_wrist"), ("l_wrist", "r_wrist")):
+        assert np.linalg.norm(arms[J[side]] - joints[J[other]]) < 0.1
+    assert np.abs(arms[[J["l_knee"], J["r_ankle"]]] - joints[[J["l_knee"], J["r_ankle"]]]).max() < 0.02
+
+
+def test_the_sides_recheck_takes_a_twin_only_on_a_clear_lead():
+    s = TrackerSettings()
+    h = s.heading
+    state = TrackingState(log=({},) * h.limb_every)
+    twins = lambda pose: [("legs", pose + 1.0), ("arms", pose + 2.0)]  # noqa: E731
+    energies = {0.0: 100.0, 1.0: 80.0, 2.0: 90.0}
+    refit = lambda pose: (pose, energies[float(pose[0])])             # noqa: E731
+    x, changes, switched = recheck_limb_sides(state, np.zeros(48), refit, twins, s)
+    assert switched and (x == 1.0).all()
+    assert changes["limb_swaps"] == ({"frame": h.limb_every, "limbs": "legs",
+                                      "energy_kept": 100.0, "energy_swapped": 80.0},)
+    close = {0.0: 100.0, 1.0: 100.0 * (1 - 0.5 * h.limb_margin), 2.0: 120.0}
+    x, changes, switched = recheck_limb_sides(
+        state, np.zeros(48), lambda pose: (pose, close[float(pose[0])]), twins, s)
+    assert not switched and changes == {} and not x.any()
+    _, changes, switched = recheck_limb_sides(state.replace(log=({},)), np.zeros(48), refit,
+                                              twins, s)
+    assert not switched and changes == {}
+
+
+def test_a_start_with_the_legs_crossed_is_uncrossed_while_tracking(squat):
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x_true = fit_pose_to_joints(body, truth[0])
+    x0 = fit_joints(body, np.asarray(body.joint_positions(x_true))[LEGS_SWAPPED], x_true)
+    legs = [i for i, n in enumerate(JOINT_NAMES) if n[2:] in ("knee", "ankle")]
+
+    def leg_errors(joints):
+        return np.linalg.norm(np.asarray(joints)[:, legs] - truth[:, legs], axis=-1).mean(axis=-1)
+
+    with Tracker(body, squat.camera, settings=TrackerSettings()) as tracker:
+        result = tracker.track_sequence(squat, init_pose=x0)
+        swaps = tracker.describe()["limb_swaps"]
+    err = leg_errors(result.joints)
+    assert err[0] > 0.15                              # the start has the legs crossed
+    assert swaps and swaps[0]["limbs"] == "legs"
+    assert swaps[0]["frame"] <= 2 * TrackerSettings().heading.limb_every
+    assert err[swaps[-1]["frame"]:].max() < 0.1
+    off = TrackerSettings(heading={"limb_every": 0})
+    with Tracker(body, squat.camera, settings=off) as tracker:
+        stuck = leg_errors(tracker.track_sequence(squat, init_pose=x0).joints)
+    assert stuck[-5:].min() > 0.15
 
 
 def test_flip_search_asks_for_the_other_heading_and_switches_on_a_clear_lead_only():

@@ -227,7 +227,8 @@ def test_a_person_facing_away_is_found_by_tracking_both_headings():
     tracker = Tracker(body, CAMERA, method="hc", segmenter=_segment)
     result = tracker.track_sequence(seq)
     check = tracker.init_info["heading_check"]
-    assert check["kept"] == "turned"
+    assert check["kept"] == "turned" and check["by"] == "unexplained"
     assert check["unexplained_turned"] < check["unexplained_initial"]
+    assert check["energy_turned"] < check["energy_initial"]
     err = _errors(body, result.poses, truth)
     assert np.median(err) < 0.06                           # facing the camera would swap left and right

@@ -48,6 +48,9 @@ class TrackingState:
         The rechecks' accumulated evidence for the twin (a CUSUM, :func:`.heading.recheck_heading`).
     heading_switches : tuple of dict
         Each time a recheck replaced the track by its turned twin: ``frame``, energies.
+    limb_swaps : tuple of dict
+        Each time the sides recheck exchanged the legs' or the arms' sides: ``frame``,
+        ``limbs``, energies (:func:`.heading.recheck_limb_sides`).
     """
 
     pose: np.ndarray | None = None
@@ -64,6 +67,7 @@ class TrackingState:
     heading_evidence: float = 0.0
     proposal_misses: int = 0
     heading_switches: tuple = ()
+    limb_swaps: tuple = ()
 
     @property
     def frame(self) -> int:

@@ -42,7 +42,8 @@ from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
-from .heading import flip_search, recheck_by_search, recheck_heading, swapped_twins, turned_pose
+from .heading import (flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
+                      recheck_limb_sides, swapped_twins, turned_pose)
 from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
@@ -218,6 +219,14 @@ class Tracker:
         None when the track was dropped (no person for
         :attr:`ObserveSettings.absent_frames` frames in a row).
         """
+        state, x, _ = self._advance(state, depth)
+        return state, x
+
+    def _advance(self, state, depth, score: bool = False):
+        """:meth:`advance`, plus (with ``score``) the frame's energy without the motion prior
+        per foreground pixel at the tracked pose, else None (None too when the track was
+        dropped): what the start's front/back check compares
+        (:func:`.heading.settle_heading`)."""
         if state.pose is None:
             raise RuntimeError("call init(depth0) before step()")
         depth = as_depth(depth, self.camera)
@@ -229,7 +238,7 @@ class Tracker:
         if absent >= s.observe.absent_frames:
             return state.logged({"absent": True}, pose=None, absent=0,
                                 velocity=np.zeros(self.body.dof),
-                                frames_without_person=state.frames_without_person + 1), None
+                                frames_without_person=state.frames_without_person + 1), None, None
         energy = self._energy(frame).with_prior(self.prior, x_prev, v_pred)
         x, e = search(energy, self.climbers, s, self.recorder, x_pred, x_prev,
                       climb_it=self.method in ("hc", "hc+ep"))
@@ -262,21 +271,35 @@ class Tracker:
                               **flags},
                              pose=x, velocity=velocity, absent=absent, proposal_misses=misses,
                              **changes)
-        return state, x.copy()
+        if not score:
+            return state, x.copy(), None
+        pixels = max(float(np.count_nonzero(frame.foreground.mask)), 1.0)
+        return state, x.copy(), energy.without_prior().one(x) / pixels
 
     def _recheck_heading(self, state, energy, frame, x):
         """:func:`.heading.recheck_heading` on this frame (coarse renderer, no motion prior),
-        and every :attr:`HeadingSettings.search_every` frames :func:`.heading.recheck_by_search`."""
+        then (unless it turned) :func:`.heading.recheck_limb_sides`, and every
+        :attr:`HeadingSettings.search_every` frames :func:`.heading.recheck_by_search`.
+        Returns ``(pose, state changes, switched)``."""
         bare = energy.without_prior()
+        fitted = {}                          # the tracked pose is climbed once for both rechecks
 
         def refit(pose):
-            return climb(bare, self.climbers.start, pose, self.recorder,
-                         passes=self.settings.heading.twin_passes)
+            key = np.asarray(pose, dtype=np.float64).tobytes()
+            if key not in fitted:
+                fitted[key] = climb(bare, self.climbers.start, pose, self.recorder,
+                                    passes=self.settings.heading.twin_passes)
+            return fitted[key]
 
         pixels = float(np.count_nonzero(frame.foreground.mask))
         with self.recorder.timed("heading"):
             y, changes, turned = recheck_heading(state, x, refit, self._twins, pixels,
                                                  self.settings)
+            if not turned:
+                y, more, turned = recheck_limb_sides(
+                    state, x, refit, lambda pose: limb_swapped_twins(self.body, pose),
+                    self.settings)
+                changes = {**changes, **more}
         every = self.settings.heading.search_every
         if turned or every <= 0 or state.frame % every:
             return y, changes, turned
@@ -302,16 +325,20 @@ class Tracker:
         return run
 
     def track_through(self, state, depths):
-        """``advance`` through ``depths``; ``(state, poses (K, 48), mean cost)``, or None when
-        the track is dropped on the way."""
-        out = []
+        """``advance`` through ``depths``; ``(state, poses (K, 48), scores)``, or None when
+        the track is dropped on the way. ``scores``: the means over the frames of the
+        unexplained share (``"unexplained"``) and of the energy without the motion prior
+        per foreground pixel (``"energy"``)."""
+        out, energies = [], []
         for d in depths:
-            state, x = self.advance(state, d)
+            state, x, e = self._advance(state, d, score=True)
             if x is None:
                 return None
             out.append(x)
+            energies.append(e)
         costs = [f["cost"] for f in state.log[-len(depths):]]
-        return state, np.array(out), float(np.mean(costs))
+        return state, np.array(out), {"unexplained": float(np.mean(costs)),
+                                      "energy": float(np.mean(energies))}
 
     def turned_start(self, frame):
         """The turned twin of a pose, climbed on the start ``frame`` (re-uploaded)."""
@@ -400,6 +427,7 @@ class Tracker:
                 "recoveries": [dict(r) for r in self.state.recoveries] + (
                     [{**self.state.lost, "frames_to_recover": None}] if self.state.lost else []),
                 "heading_switches": list(self.state.heading_switches),
+                "limb_swaps": list(self.state.limb_swaps),
                 "energies": [f.get("energy") for f in self.state.log]}
 
 
