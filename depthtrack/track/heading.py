@@ -38,6 +38,11 @@ from ..contract import JOINT_INDEX, JOINT_NAMES
 from .settings import TWIN_STARTS
 
 
+def due(state, every: int) -> bool:
+    """Whether a recheck run every ``every`` frames (0 = never) runs on ``state``'s frame."""
+    return every > 0 and state.frame % every == 0
+
+
 def turned_pose(pose):
     """``pose (48,)`` turned half a turn about the body's long axis through the pelvis:
     the same silhouette seen from the other side (front and back swapped)."""
@@ -234,7 +239,7 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     switched : bool
     """
     h = settings.heading
-    if h.every <= 0 or state.frame % h.every:
+    if not due(state, h.every):
         return pose, {}, False
     _, e_pose = refit(pose)
     fits = [refit(t) for t in np.asarray(swapped_twin_of(pose)).reshape(-1, len(pose))]
@@ -302,14 +307,13 @@ def recheck_limb_sides(state, pose, refit, limb_twins_of, settings):
         For the state (``limb_swaps``).
     switched : bool
     """
-    h = settings.heading
-    if h.limb_every <= 0 or state.frame % h.limb_every:
+    if not due(state, settings.heading.limb_every):
         return pose, {}, False
     _, e_pose = refit(pose)
     fits = [(name, *refit(twin)) for name, twin in limb_twins_of(pose)]
     name, y, e_twin = min(fits, key=lambda f: float(f[2]))
     lead = (e_pose - float(e_twin)) / max(abs(e_pose), 1e-9)
-    if lead <= h.limb_margin:
+    if lead <= settings.heading.limb_margin:
         return pose, {}, False
     swap = {"frame": state.frame, "limbs": name, "energy_kept": round(float(e_pose), 1),
             "energy_swapped": round(float(e_twin), 1)}

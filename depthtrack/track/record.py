@@ -11,7 +11,7 @@ from contextlib import contextmanager
 #: Timed stages (seconds). ``association`` and ``recover`` include the render, search,
 #: detect and evidence time spent inside them; ``search`` excludes its render time.
 STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover",
-          "heading", "propose")
+          "heading", "propose", "reach")
 #: Counters. ``correspondences`` / ``accepted`` count every correspondence the association
 #: tried / kept; ``proposal_correspondences`` / ``proposal_accepted`` those of them from the
 #: recogniser's joint proposals (``ProposalSettings.evidence``).

@@ -253,6 +253,12 @@ class ProposalSettings:
     model's joint of its class counts as explained; of the others at most
     ``evidence_max`` correspondences are tried per frame, most confident first, after the
     part detector's.
+
+    ``reach_every``: every so many frames (0 = never) each limb is also tried re-fitted to the
+    wrist or ankle proposals it can reach and is not at; the best, climbed, replaces the pose
+    when its energy without the motion prior is lower by the fraction ``reach_margin``
+    (:mod:`.reach`: a hand or foot tracked far from where it is, which the association's
+    pruning never brings back).
     """
 
     enabled: bool = True
@@ -267,6 +273,8 @@ class ProposalSettings:
     evidence_joints: tuple = ("elbow", "knee")
     evidence_distance: float = 0.2
     evidence_max: int = 4
+    reach_every: int = 2
+    reach_margin: float = 0.03
 
     def __post_init__(self):
         for name in ("enabled", "evidence"):
@@ -284,7 +292,7 @@ class ProposalSettings:
                f"ProposalSettings.start_candidates must be true or false, not {self.start_candidates!r}")
         _positive(self, "distance", "lost_frames")
         _positive(self, "min_confidence", "lost_fraction", "accept_margin", "start_weight",
-                  allow_zero=True)
+                  "reach_every", "reach_margin", allow_zero=True)
 
 
 @dataclass(frozen=True)

@@ -51,6 +51,9 @@ class TrackingState:
     limb_swaps : tuple of dict
         Each time the sides recheck exchanged the legs' or the arms' sides: ``frame``,
         ``limbs``, energies (:func:`.heading.recheck_limb_sides`).
+    reaches : tuple of dict
+        Each time a limb was re-fitted to a far proposal: ``frame``, ``limb``, energies
+        (:func:`.reach.recheck_reach`).
     """
 
     pose: np.ndarray | None = None
@@ -68,6 +71,7 @@ class TrackingState:
     proposal_misses: int = 0
     heading_switches: tuple = ()
     limb_swaps: tuple = ()
+    reaches: tuple = ()
 
     @property
     def frame(self) -> int:

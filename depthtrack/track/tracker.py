@@ -42,8 +42,10 @@ from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
-from .heading import (flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
+from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
+from .proposals import frame_proposals
+from .reach import reach_candidates, recheck_reach
 from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
@@ -278,7 +280,8 @@ class Tracker:
 
     def _recheck_heading(self, state, energy, frame, x):
         """:func:`.heading.recheck_heading` on this frame (coarse renderer, no motion prior),
-        then (unless it turned) :func:`.heading.recheck_limb_sides`, and every
+        then (unless it turned) :func:`.heading.recheck_limb_sides` and, with the recogniser,
+        :func:`.reach.recheck_reach`, and every
         :attr:`HeadingSettings.search_every` frames :func:`.heading.recheck_by_search`.
         Returns ``(pose, state changes, switched)``."""
         bare = energy.without_prior()
@@ -300,8 +303,15 @@ class Tracker:
                     state, x, refit, lambda pose: limb_swapped_twins(self.body, pose),
                     self.settings)
                 changes = {**changes, **more}
+        if not turned and self.forest is not None:
+            with self.recorder.timed("reach"):
+                y, more, turned = recheck_reach(
+                    state, x, refit, bare, lambda pose: reach_candidates(
+                        self.body, pose, frame_proposals(self, frame),
+                        self.settings.propose.min_confidence), self.settings)
+            changes = {**changes, **more}
         every = self.settings.heading.search_every
-        if turned or every <= 0 or state.frame % every:
+        if turned or not due(state, every):
             return y, changes, turned
         with self.recorder.timed("heading"):
             _, e_x = refit(x)
@@ -428,6 +438,7 @@ class Tracker:
                     [{**self.state.lost, "frames_to_recover": None}] if self.state.lost else []),
                 "heading_switches": list(self.state.heading_switches),
                 "limb_swaps": list(self.state.limb_swaps),
+                "reaches": list(self.state.reaches),
                 "energies": [f.get("energy") for f in self.state.log]}
 
 

@@ -1,0 +1,138 @@
+"""Reaching for a lost hand or foot: limbs re-fitted to the recogniser's far proposals.
+
+Evidence propagation pulls a limb toward detections near where the pose has it (the
+association prunes the rest), so a limb that has settled far from where it is -- a raised
+forearm tracked pointing sideways, a foot behind the other leg -- stays there, while the
+recogniser finds the hand within centimetres (dev: 01_08 on Azure NFOV from 240 degrees,
+seed 3, the right wrist 31-46 cm off for the second half of the clip with a wrist proposal
+1-8 cm from the truth on every frame looked at). So every
+:attr:`~.settings.ProposalSettings.reach_every` frames each limb is also tried reaching to
+the wrist or ankle proposals it could reach and that no hand (or foot) of the pose is at
+(either side's: the recogniser's sides are at chance), its middle joint left to the fit or placed at a
+proposal of its own class; the candidates are scored in one batch, the best is climbed like
+the tracked pose, and it replaces the pose when its energy without the motion prior is
+lower by :attr:`~.settings.ProposalSettings.reach_margin` (a fraction).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..contract import JOINT_INDEX
+from .heading import due, fit_joints
+from .proposals import confident
+
+#: Each limb: (root, middle, end) joints.
+LIMBS = {"l_arm": ("l_shoulder", "l_elbow", "l_wrist"), "r_arm": ("r_shoulder", "r_elbow", "r_wrist"),
+         "l_leg": ("l_hip", "l_knee", "l_ankle"), "r_leg": ("r_hip", "r_knee", "r_ankle")}
+#: Slack (m) on a limb's length when asking whether it can reach a proposal, and on a bone's
+#: when asking whether a middle-joint proposal fits between root and end.
+REACH_SLACK = 0.05
+
+
+def _class_proposals(pos, ok, name):
+    """``(k, 3)``: the usable proposals of ``name``'s class, both sides' (``pos (15, k, 3)``,
+    ``ok (15, k)`` from :func:`.proposals.confident`)."""
+    kind = name[2:]
+    ids = [JOINT_INDEX["l_" + kind], JOINT_INDEX["r_" + kind]]
+    return pos[ids][ok[ids]].reshape(-1, 3)
+
+
+def reach_candidates(body, pose, proposals, min_confidence: float, near: float = 0.1):
+    """Poses with one limb re-fitted to a proposal of its end joint's class.
+
+    Parameters
+    ----------
+    body : BodyModel
+    pose : (48,) float
+        The tracked pose.
+    proposals : JointProposals or None
+        The frame's (:func:`.proposals.frame_proposals`).
+    min_confidence : float
+        Proposals below this (m^2) are left out.
+    near : float
+        A proposal within this (m) of the limb's end joint, or of the other side's, is
+        already explained.
+
+    Returns
+    -------
+    poses : (K, 48) float
+        For each limb and each end-joint proposal within its reach (root joint to proposal
+        at most the limb's length plus :data:`REACH_SLACK`) and farther than ``near`` from
+        both ends of the limb's class: the pose fitted (:func:`~.heading.fit_joints`, from ``pose``) with
+        every other joint kept and the end at the proposal, the middle joint free, and once
+        more with the middle joint at each of its class's proposals that fits between.
+    limbs : list of str
+        Each candidate's limb (:data:`LIMBS` key).
+    """
+    if proposals is None:
+        return np.zeros((0, len(pose))), []
+    pose = np.asarray(pose, dtype=np.float64)
+    joints = np.asarray(body.joint_positions(pose))
+    rest = np.asarray(body.joint_positions(np.zeros(len(pose))))
+    pos, ok = confident(proposals, min_confidence)
+    out, limbs = [], []
+    for limb, names in LIMBS.items():
+        root, mid, end = (JOINT_INDEX[n] for n in names)
+        upper = float(np.linalg.norm(rest[mid] - rest[root]))
+        lower = float(np.linalg.norm(rest[end] - rest[mid]))
+        ends = _class_proposals(pos, ok, names[2])
+        mids = _class_proposals(pos, ok, names[1])
+        kind = names[2][2:]
+        both_ends = joints[[JOINT_INDEX["l_" + kind], JOINT_INDEX["r_" + kind]]]
+        for p in ends:
+            if (np.linalg.norm(both_ends - p, axis=1).min() < near
+                    or np.linalg.norm(p - joints[root]) > upper + lower + REACH_SLACK):
+                continue
+            target = joints.copy()
+            target[end] = p
+            weights = np.ones(len(joints))
+            weights[mid] = 0.0
+            out.append(fit_joints(body, target, pose, weights=weights))
+            limbs.append(limb)
+            for m in mids:
+                if (abs(np.linalg.norm(m - joints[root]) - upper) < REACH_SLACK
+                        and abs(np.linalg.norm(p - m) - lower) < REACH_SLACK):
+                    target[mid] = m
+                    out.append(fit_joints(body, target, pose))
+                    limbs.append(limb)
+    return np.array(out).reshape(-1, len(pose)), limbs
+
+
+def recheck_reach(state, pose, refit, energy_of, candidates, settings):
+    """The reach recheck of one frame (module docstring): keep ``pose`` or the best limb
+    re-fitted to a far proposal.
+
+    Parameters
+    ----------
+    state : TrackingState
+        Before this frame is logged.
+    pose : (48,) float
+    refit : callable ``(pose (48,)) -> (pose (48,), float)``
+        A pose climbed on the frame by the energy without the motion prior, and that energy.
+    energy_of : callable ``(poses (K, 48)) -> (K,)``
+        That energy, unclimbed, in one batch.
+    candidates : callable ``(pose (48,)) -> (poses (K, 48), limbs list of str)``
+        :func:`reach_candidates` on this frame.
+    settings : TrackerSettings
+
+    Returns
+    -------
+    pose : (48,) float
+        The re-fitted pose when it took over, else ``pose``.
+    changes : dict
+        For the state (``reaches``).
+    switched : bool
+    """
+    if not due(state, settings.propose.reach_every):
+        return pose, {}, False
+    poses, limbs = candidates(pose)
+    if not len(poses):
+        return pose, {}, False
+    best = int(np.argmin(energy_of(poses)))
+    _, e_pose = refit(pose)
+    y, e_y = refit(poses[best])
+    if float(e_y) >= (1.0 - settings.propose.reach_margin) * float(e_pose):
+        return pose, {}, False
+    reach = {"frame": state.frame, "limb": limbs[best], "energy_kept": round(float(e_pose), 1),
+             "energy_reached": round(float(e_y), 1)}
+    return np.asarray(y, dtype=np.float64), {"reaches": state.reaches + (reach,)}, True
