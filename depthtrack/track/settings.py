@@ -9,6 +9,9 @@ starts: ``start`` (the global search of the first frame and of a recovery), ``he
 Every number of the search schedule lives here; ``TrackerSettings.to_dict()`` is written
 whole into ``summary.json``. One set serves every sequence; never tune it per clip.
 
+The groups of a frame are defined here, those of a start in :mod:`.start_settings` (and
+re-exported here), the shared value checks in :mod:`.setting_checks`.
+
 The flat names of the earlier single-level settings still construct and read
 (``TrackerSettings(heading_frames=0)``, ``settings.lost_ratio``): :data:`FLAT_NAMES` maps
 each to its group and field.
@@ -20,23 +23,12 @@ from dataclasses import dataclass, field
 
 from ..errors import InputError
 from .flat_names import FLAT_NAMES  # noqa: F401  (re-exported: the flat names' one place)
-
-
-def _check(ok: bool, message: str) -> None:
-    if not ok:
-        raise InputError(None, message)
-
-
-def _positive(group, *names, allow_zero=False):
-    for n in names:
-        v = getattr(group, n)
-        _check(v >= 0 if allow_zero else v > 0,
-               f"{type(group).__name__}.{n} must be {'>= 0' if allow_zero else '> 0'}, not {v!r}")
-
-
-def _power_of_two(v, name, zero_ok=False):
-    _check((zero_ok and v == 0) or (4 <= v <= 1024 and not v & (v - 1)),
-           f"{name} must be a power of two in 4..1024{' or 0' if zero_ok else ''}, not {v!r}")
+from .setting_checks import check as _check
+from .setting_checks import positive as _positive
+from .setting_checks import power_of_two as _power_of_two
+# the groups of a start are defined in start_settings.py; import every group from here
+from .start_settings import (START_SCORES, START_TWINS, TWIN_STARTS,  # noqa: F401
+                             HeadingSettings, HeightSettings, ShapeSettings, StartSettings)
 
 
 @dataclass(frozen=True)
@@ -293,217 +285,6 @@ class ProposalSettings:
         _positive(self, "distance", "lost_frames")
         _positive(self, "min_confidence", "lost_fraction", "accept_margin", "start_weight",
                   "reach_every", "reach_margin", allow_zero=True)
-
-
-@dataclass(frozen=True)
-class StartSettings:
-    """The global search of an automatic start and of a recovery (:mod:`.start`).
-
-    Attributes
-    ----------
-    passes : int
-        Hill-climbing passes over every joint for each finalist.
-    facing_prior : float
-        Weight of the initial-heading prior, per foreground pixel.
-    step_factor, extra_levels, max_iterations : float, int, int
-        The search starts far off: steps ``step_factor`` times the per-frame ones, this many
-        more rungs, this many batches per block.
-    diagonals : bool
-        Diagonal moves in its blocks.
-    shortlist : int
-        Best scored candidates refined on the root.
-    root_blocks, root_passes : int
-        Blocks (from the root) and passes of that refinement.
-    finalists : int
-        Best of the shortlist refined on every joint (and associated, "ep" / "hc+ep").
-    associate_level : int
-        Rung the climb after a finalist's association starts on.
-    centre_push : float
-        The visible surface lies in front of the body's centre: metres pushed back along the ray.
-    axial_shifts : tuple of float
-        Shifts (m) along the body's long axis tried for every candidate.
-    """
-
-    passes: int = 3
-    facing_prior: float = 0.1
-    step_factor: float = 2.0
-    extra_levels: int = 2
-    max_iterations: int = 10
-    diagonals: bool = True
-    shortlist: int = 6
-    root_blocks: int = 2
-    root_passes: int = 2
-    finalists: int = 3
-    associate_level: int = 1
-    centre_push: float = 0.08
-    axial_shifts: tuple = (0.0, -0.3, -0.15, 0.15, 0.3)
-
-    def __post_init__(self):
-        _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
-                  "root_passes", "finalists")
-        _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",
-                  allow_zero=True)
-        object.__setattr__(self, "axial_shifts", tuple(float(s) for s in self.axial_shifts))
-
-
-#: The start check's other hypothesis: the pose turned half a turn about its long axis
-#: (limbs turned with it), or its swapped twin (the joints kept, the sides exchanged, as the
-#: recheck while tracking uses).
-START_TWINS = ("turned", "swapped", "search")
-#: How the swapped twins may be fitted (:func:`.heading.swapped_twins`; ``twin_starts``).
-TWIN_STARTS = ("turned", "rest")
-#: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
-START_SCORES = ("energy", "unexplained")
-
-
-@dataclass(frozen=True)
-class HeadingSettings:
-    """The front/back check after an automatic start (:mod:`.heading`).
-
-    The pose and its twin turned to face the other way are both tracked through ``frames``
-    frames (0 = off); the turned one replaces the first when its mean score over those frames
-    is lower by a fraction: with ``start_by="unexplained"`` (the default) the unexplained
-    share of the foreground, lower by ``margin``; with ``"energy"`` the energy without the
-    motion prior (likelihood plus pose prior) per foreground pixel at the tracked poses, lower
-    by ``energy_margin``. The share decides by default: on the 93 dev starts of the wide and
-    parity presets the energy (margin 0) kept the heading whose ten frames were clearly
-    worse (by 20 points of joints within 10 cm) 14 times, the share with its 10 % margin 11
-    times; the energy's wrong leads reached 36 %, seen from 270 degrees. ``summary.json``
-    keeps both scores under ``heading_check``.
-
-    Then, while tracking, every ``every`` frames (0 = never) the tracked pose and its twin
-    facing the other way are both climbed on the frame (``twin_passes`` passes with the
-    start's steps; :func:`.heading.recheck_heading`): the twin gets a vote when its energy
-    without the motion prior (likelihood plus pose prior) is lower by ``recheck_margin``
-    times the foreground's pixel count, and replaces the track after ``votes`` votes in a
-    row.
-
-    Small wins add up too: each recheck adds the twin's lead (energy difference per
-    foreground pixel) less ``evidence_drift`` to a running sum that never goes below zero
-    (Page's CUSUM test), and the twin takes over when the sum passes ``evidence_threshold``
-    (0 = off). A profile view gives the right heading a steady small lead, below
-    ``recheck_margin``; a frontal view, where the twins explain the image equally well,
-    gives leads of either sign that the drift cancels.
-
-    ``start_twin``: the start check's other hypothesis (:data:`START_TWINS`), by default the
-    swapped twin, as the recheck's: a twin turned with its limbs competes with a different
-    fit of the limbs, not only with the other heading, and on dev clips seen from the front
-    that made the check keep the wrong one. ``"search"``: the global search's best pose
-    facing the other way (:func:`.heading.flip_search`).
-
-    A twin keeps the tracked pose's limb errors: a wrong-facing track places the limbs where
-    its own knees and elbows can bend, and exchanging the sides does not put them where the
-    image has them, so the right heading's twin can lose to the wrong heading's fit. So every
-    ``search_every`` frames (0 = never) the global search looks for the best pose facing the
-    other way (:func:`.heading.flip_search`); it takes over when its energy without the
-    motion prior is lower than the tracked pose's, climbed alike, by ``search_margin`` times
-    the foreground's pixel count -- and, with ``search_both``, lower than the same search's
-    best pose facing the tracked way too (the tracked pose is fitted by a local climb only, so
-    a fresh global search would beat it by its effort alone, whichever way it faces).
-
-    The sides of the limbs too: every ``limb_every`` frames (0 = never) twins of the tracked
-    pose with the legs' or the arms' sides exchanged are climbed alike, and the lower one
-    replaces the track when its energy is lower by the fraction ``limb_margin``
-    (:func:`.heading.recheck_limb_sides`: a track with its legs crossed).
-
-    ``twin_starts``: where the swapped twin's fit starts (:data:`TWIN_STARTS`, one or both;
-    :func:`.heading.swapped_twins`); every twin is climbed and the lowest energy competes,
-    in the recheck and in the start check. Both by default: a twin fitted from the turned
-    pose inherits its contortions; from the rest pose it does not (dev 05_20, Kinect v2 from
-    120 degrees, seed 2: 20 % -> 88 % of joints within 10 cm, the start check now keeping
-    the twin; 105_05 seed 3 62 -> 72 %; five other dev sequences unchanged).
-    """
-
-    frames: int = 10
-    margin: float = 0.1
-    start_by: str = "unexplained"
-    energy_margin: float = 0.0
-    every: int = 4
-    recheck_margin: float = 0.05
-    votes: int = 2
-    twin_passes: int = 1
-    evidence_drift: float = 0.01
-    evidence_threshold: float = 0.1
-    start_twin: str = "swapped"
-    search_every: int = 0
-    search_margin: float = 0.05
-    search_both: bool = True
-    twin_starts: tuple = ("turned", "rest")
-    limb_every: int = 4
-    limb_margin: float = 0.05
-
-    def __post_init__(self):
-        _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
-                                              f"{', '.join(START_SCORES)}, not {self.start_by!r}")
-        _check(self.start_twin in START_TWINS, f"HeadingSettings.start_twin must be one of "
-                                               f"{', '.join(START_TWINS)}, not {self.start_twin!r}")
-        _positive(self, "frames", "margin", "every", "recheck_margin", "evidence_drift",
-                  "evidence_threshold", "search_every", "search_margin", "energy_margin",
-                  "limb_every", "limb_margin", allow_zero=True)
-        _positive(self, "votes", "twin_passes")
-        object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
-        _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
-               f"HeadingSettings.twin_starts must be a non-empty choice of "
-               f"{', '.join(TWIN_STARTS)}, not {self.twin_starts!r}")
-
-
-@dataclass(frozen=True)
-class HeightSettings:
-    """The body-height fit when a sequence does not give it (:mod:`.height`).
-
-    Heights ``ratio`` apart, ``steps`` either side of the foreground's guess, then at most
-    ``walk`` more outwards while the best is at an edge; all within ``min_m .. max_m``.
-    """
-
-    ratio: float = 1.08
-    steps: int = 2
-    walk: int = 3
-    min_m: float = 1.2
-    max_m: float = 2.2
-
-    def __post_init__(self):
-        _check(self.ratio > 1, f"HeightSettings.ratio must be > 1, not {self.ratio!r}")
-        _check(0 < self.min_m < self.max_m, f"HeightSettings needs 0 < min_m < max_m, not "
-                                            f"{self.min_m!r}, {self.max_m!r}")
-        _positive(self, "steps", "walk", allow_zero=True)
-
-
-@dataclass(frozen=True)
-class ShapeSettings:
-    """The body-shape fit from the first frames (:func:`~.height.fit_body_shape`).
-
-    The first ``frames`` frames are tracked ("hc") with the template body, ``fit_frames``
-    of them (spread evenly) go to :func:`~.shape_fit.fit_shape` with the tracker's poses,
-    and the whole sequence is then tracked with the fitted body. ``tile`` bounds the fit's
-    renderer (0 = one camera pixel per tile pixel, up to 256: slow on llvmpipe); ``rounds``
-    and ``max_iterations`` its search; ``prior_weight`` its population prior.
-    ``enabled`` (the default) fits the shape; False = the template body (at the given or
-    fitted height). On six dev people (no clothing; README, "Body shape") the fitted body
-    covers the person's silhouette with an IoU of 0.854 against the template's 0.786 and
-    leaves 9.2 % of the person's pixels unexplained against 13.0 %: what a user without
-    ground truth sees of the fit. Joints within 10 cm moved by +0.8 points on four dev
-    people (s.d. 7.7): no loss in accuracy, for 16 trial frames and a fit of a few seconds.
-    """
-
-    enabled: bool = True
-    frames: int = 16
-    fit_frames: int = 4
-    tile: int = 64
-    rounds: int = 1
-    max_iterations: int = 20
-    prior_weight: float = 30.0
-
-    def __post_init__(self):
-        _check(isinstance(self.enabled, bool), f"ShapeSettings.enabled must be true or false, "
-                                               f"not {self.enabled!r}")
-        _check(int(self.fit_frames) >= 1, f"ShapeSettings.fit_frames must be at least 1, "
-                                          f"not {self.fit_frames!r}")
-        _check(int(self.frames) >= int(self.fit_frames),
-               f"ShapeSettings.frames must be at least fit_frames ({self.fit_frames}), "
-               f"not {self.frames!r}")
-        _power_of_two(self.tile, "ShapeSettings.tile", zero_ok=True)
-        _positive(self, "rounds", "max_iterations")
-        _positive(self, "prior_weight", allow_zero=True)
 
 
 #: Group name -> settings class, in the order of a frame.

@@ -249,11 +249,11 @@ class Tracker:
             x, e, accepted = associate_stage(self, energy, frame, x, e)
         if self.method != "ep":
             x, e = polish(energy, self.renderers.fine, self.climbers, s, self.recorder, x)
-        turned = False
+        switched = None
         if self.method != "ep":
-            x, changes, turned = self._recheck_heading(state, energy, frame, x)
+            x, changes, switched = self._rechecks(state, energy, frame, x)
             state = state.replace(**changes)
-            if turned:
+            if switched:
                 e = energy.one(x)
         cost = unexplained(energy, x)
         recovered = False
@@ -266,10 +266,11 @@ class Tracker:
                 off, misses = proposal_check(self, frame, x, 0)
                 reason = loss_reason(cost, recent, s, misses)
         changes, flags = judge_frame(state, cost, reason, s, found)
-        velocity = (np.zeros(self.body.dof) if recovered or turned
+        velocity = (np.zeros(self.body.dof) if recovered or switched
                     else pose_velocity(x_prev, x))
         state = state.logged({"energy": e, "cost": cost, "accepted": accepted,
-                              "recovered": recovered, "turned": turned, "disagreement": off,
+                              "recovered": recovered, "turned": switched in ("heading", "search"),
+                              "switched": switched, "disagreement": off,
                               **flags},
                              pose=x, velocity=velocity, absent=absent, proposal_misses=misses,
                              **changes)
@@ -278,14 +279,17 @@ class Tracker:
         pixels = max(float(np.count_nonzero(frame.foreground.mask)), 1.0)
         return state, x.copy(), energy.without_prior().one(x) / pixels
 
-    def _recheck_heading(self, state, energy, frame, x):
-        """:func:`.heading.recheck_heading` on this frame (coarse renderer, no motion prior),
-        then (unless it turned) :func:`.heading.recheck_limb_sides` and, with the recogniser,
-        :func:`.reach.recheck_reach`, and every
-        :attr:`HeadingSettings.search_every` frames :func:`.heading.recheck_by_search`.
-        Returns ``(pose, state changes, switched)``."""
+    def _rechecks(self, state, energy, frame, x):
+        """The rechecks of a frame (coarse renderer, no motion prior), each where due:
+        :func:`.heading.recheck_heading`, then :func:`.heading.recheck_limb_sides`, then with
+        the recogniser :func:`.reach.recheck_reach`, then :func:`.heading.recheck_by_search`;
+        the first that replaces the pose ends them.
+
+        Returns ``(pose, state changes, switched)``: ``switched`` is None, or which recheck
+        replaced the pose (``"heading"``, ``"limbs"``, ``"reach"``, ``"search"``).
+        """
         bare = energy.without_prior()
-        fitted = {}                          # the tracked pose is climbed once for both rechecks
+        fitted = {}                          # the tracked pose is climbed once for every recheck
 
         def refit(pose):
             key = np.asarray(pose, dtype=np.float64).tobytes()
@@ -298,28 +302,29 @@ class Tracker:
         with self.recorder.timed("heading"):
             y, changes, turned = recheck_heading(state, x, refit, self._twins, pixels,
                                                  self.settings)
-            if not turned:
-                y, more, turned = recheck_limb_sides(
-                    state, x, refit, lambda pose: limb_swapped_twins(self.body, pose),
-                    self.settings)
-                changes = {**changes, **more}
-        if not turned and self.forest is not None:
+            if turned:
+                return y, changes, "heading"
+            y, more, swapped = recheck_limb_sides(
+                state, x, refit, lambda pose: limb_swapped_twins(self.body, pose), self.settings)
+            if swapped:
+                return y, {**changes, **more}, "limbs"
+        if self.forest is not None:
             with self.recorder.timed("reach"):
-                y, more, turned = recheck_reach(
+                y, more, reached = recheck_reach(
                     state, x, refit, bare, lambda pose: reach_candidates(
                         self.body, pose, frame_proposals(self, frame),
                         self.settings.propose.min_confidence), self.settings)
-            changes = {**changes, **more}
-        every = self.settings.heading.search_every
-        if turned or not due(state, every):
-            return y, changes, turned
+            if reached:
+                return y, {**changes, **more}, "reach"
+        if not due(state, self.settings.heading.search_every):
+            return x, changes, None
         with self.recorder.timed("heading"):
             _, e_x = refit(x)
             taken, more = recheck_by_search(state, x, e_x, self._flip_searcher(bare, frame),
                                             pixels, self.settings)
         if taken is None:
-            return y, changes, False
-        return taken, {**changes, **more}, True
+            return x, changes, None
+        return taken, {**changes, **more}, "search"
 
     def _twins(self, pose):
         """The swapped twins of ``pose (48,)`` the heading checks climb, ``(K, 48)``
