@@ -1,0 +1,121 @@
+"""How well each score of the start's front/back check picks the heading, on sequences with
+ground truth (:func:`depthtrack.track.heading.settle_heading`).
+
+For each sequence: the automatic start on the first frame with a person, then the start pose
+and its turned twin each tracked through the next ``HeadingSettings.frames`` frames, as the
+check does; per hypothesis both scores (mean unexplained share, mean energy without the
+motion prior per foreground pixel) and the fraction of joints within 10 cm of the truth over
+those frames. Then, per rule, how often the kept hypothesis was clearly worse (by
+``--clear`` of joints within 10 cm) than the other.
+
+    .venv/bin/python tools/start_check_bench.py SEQ [SEQ ...] [--method hc+ep] [--json OUT.jsonl]
+
+The sequences: any with ground truth, e.g. ``tools/benchmark.py --split dev --wide
+--keep-tracks``'s ``OUT/dev/sequences/*``. Tracked without the shape fit.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+
+import numpy as np
+
+REPO = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from depthtrack.body import BodyModel  # noqa: E402
+from depthtrack.io import open_sequence  # noqa: E402
+from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.tracker import Tracker  # noqa: E402
+
+#: Rules: name -> (score key, margin as a fraction).
+RULES = {"unexplained, margin 0.10": ("unexplained", 0.10),
+         "unexplained, margin 0.05": ("unexplained", 0.05),
+         "unexplained, margin 0": ("unexplained", 0.0),
+         "energy, margin 0": ("energy", 0.0)}
+
+
+def start_hypotheses(path, method: str = "hc+ep") -> dict | None:
+    """Both hypotheses of the start check on one sequence: ``{"name", "frame", "initial",
+    "turned"}``, each hypothesis ``{"unexplained", "energy", "within_10cm"}`` (None when
+    its track was dropped); None when no frame has a person or too few frames follow."""
+    seq = open_sequence(path)
+    body = BodyModel.default(height=seq.subject_height or 1.75)
+    settings = TrackerSettings(shape={"enabled": False})
+    K = settings.heading.frames
+    with Tracker(body, seq.camera, fps=seq.fps, settings=settings, method=method) as t:
+        for i in range(len(seq) - K):
+            depth = seq.depth(i)
+            fg = t.segmenter(depth, t.camera)
+            if t.person_present(fg):
+                break
+        else:
+            return None
+        state, frame, _ = t.start(t.state, depth, foreground=fg)
+        ahead = [seq.depth(i + 1 + k) for k in range(K)]
+        truth = seq.joints[i + 1:i + 1 + K]
+        out = {"name": pathlib.Path(path).name, "frame": i}
+        starts = {"initial": state.pose, "turned": t.turned_start(frame)(state.pose)}
+        for kind, pose in starts.items():
+            got = t.track_through(state.replace(pose=pose), ahead)
+            if got is None:
+                out[kind] = None
+                continue
+            joints = np.array([body.joint_positions(p) for p in got[1]])
+            within = float(np.mean(np.linalg.norm(joints - truth, axis=2) < 0.1))
+            out[kind] = {**got[2], "within_10cm": within}
+    return out
+
+
+def rule_failures(results, clear: float = 0.2) -> dict:
+    """Per rule of :data:`RULES`: the sequences where the kept hypothesis had at least
+    ``clear`` fewer joints within 10 cm than the other."""
+    out = {}
+    for rule, (key, margin) in RULES.items():
+        wrong = []
+        for r in results:
+            a, b = r.get("initial"), r.get("turned")
+            if a is None or b is None:
+                continue
+            kept, other = (b, a) if b[key] < (1.0 - margin) * a[key] else (a, b)
+            if other["within_10cm"] - kept["within_10cm"] >= clear:
+                wrong.append(r["name"])
+        out[rule] = wrong
+    return out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog="example:\n  .venv/bin/python tools/start_check_bench.py "
+                                            "OUT/dev/sequences/* --json starts.jsonl")
+    parser.add_argument("sequences", nargs="+")
+    parser.add_argument("--method", default="hc+ep", choices=["hc", "hc+ep"])
+    parser.add_argument("--clear", type=float, default=0.2,
+                        help="a kept heading counts as wrong when the other had this much more "
+                             "of the joints within 10 cm (default 0.2)")
+    parser.add_argument("--json", help="also write each sequence's result, a JSON line each")
+    args = parser.parse_args(argv)
+    results = []
+    for n, path in enumerate(args.sequences, 1):
+        r = start_hypotheses(path, args.method)
+        if r is None:
+            print(f"[{n}/{len(args.sequences)}] {path}: no start", flush=True)
+            continue
+        results.append(r)
+        print(f"[{n}/{len(args.sequences)}] {r['name']}: " + ", ".join(
+            f"{k} {'dropped' if r[k] is None else '%.0f%% within 10 cm' % (100 * r[k]['within_10cm'])}"
+            for k in ("initial", "turned")), flush=True)
+    if args.json:
+        pathlib.Path(args.json).write_text("".join(json.dumps(r) + "\n" for r in results),
+                                           encoding="utf-8")
+    for rule, wrong in rule_failures(results, args.clear).items():
+        print(f"{rule}: kept the clearly worse heading on {len(wrong)} of {len(results)}"
+              + (f" ({', '.join(wrong)})" if wrong else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
