@@ -8,10 +8,10 @@ seed 3, the right wrist 31-46 cm off for the second half of the clip with a wris
 1-8 cm from the truth on every frame looked at). So every
 :attr:`~.settings.ProposalSettings.reach_every` frames each limb is also tried reaching to
 the wrist or ankle proposals it could reach and that no hand (or foot) of the pose is at
-(either side's: the recogniser's sides are at chance), its middle joint left to the fit or placed at a
-proposal of its own class; the candidates are scored in one batch, the best is climbed like
-the tracked pose, and it replaces the pose when its energy without the motion prior is
-lower by :attr:`~.settings.ProposalSettings.reach_margin` (a fraction).
+(either side's: the recogniser's sides are at chance), its middle joint left to the fit or
+placed at a proposal of its own class; the candidates are scored in one batch, the best is
+climbed like the tracked pose, and it replaces the pose when its energy without the motion
+prior is lower by :attr:`~.settings.ProposalSettings.reach_margin` (a fraction).
 """
 from __future__ import annotations
 
@@ -19,21 +19,26 @@ import numpy as np
 
 from ..contract import JOINT_INDEX
 from .heading import due, fit_joints
-from .proposals import confident
+from .proposals import JOINT_CLASSES, confident
 
 #: Each limb: (root, middle, end) joints.
-LIMBS = {"l_arm": ("l_shoulder", "l_elbow", "l_wrist"), "r_arm": ("r_shoulder", "r_elbow", "r_wrist"),
+LIMBS = {"l_arm": ("l_shoulder", "l_elbow", "l_wrist"),
+         "r_arm": ("r_shoulder", "r_elbow", "r_wrist"),
          "l_leg": ("l_hip", "l_knee", "l_ankle"), "r_leg": ("r_hip", "r_knee", "r_ankle")}
 #: Slack (m) on a limb's length when asking whether it can reach a proposal, and on a bone's
 #: when asking whether a middle-joint proposal fits between root and end.
 REACH_SLACK = 0.05
 
 
+def _class_ids(name):
+    """Both sides' contract indices of ``name``'s joint class (:data:`.proposals.JOINT_CLASSES`)."""
+    return [JOINT_INDEX[n] for n in JOINT_CLASSES[name[2:]]]
+
+
 def _class_proposals(pos, ok, name):
     """``(k, 3)``: the usable proposals of ``name``'s class, both sides' (``pos (15, k, 3)``,
     ``ok (15, k)`` from :func:`.proposals.confident`)."""
-    kind = name[2:]
-    ids = [JOINT_INDEX["l_" + kind], JOINT_INDEX["r_" + kind]]
+    ids = _class_ids(name)
     return pos[ids][ok[ids]].reshape(-1, 3)
 
 
@@ -58,9 +63,10 @@ def reach_candidates(body, pose, proposals, min_confidence: float, near: float =
     poses : (K, 48) float
         For each limb and each end-joint proposal within its reach (root joint to proposal
         at most the limb's length plus :data:`REACH_SLACK`) and farther than ``near`` from
-        both ends of the limb's class: the pose fitted (:func:`~.heading.fit_joints`, from ``pose``) with
-        every other joint kept and the end at the proposal, the middle joint free, and once
-        more with the middle joint at each of its class's proposals that fits between.
+        both ends of the limb's class: the pose fitted (:func:`~.heading.fit_joints`, from
+        ``pose``) with every other joint kept and the end at the proposal, the middle joint
+        free, and once more with the middle joint at each of its class's proposals that fits
+        between.
     limbs : list of str
         Each candidate's limb (:data:`LIMBS` key).
     """
@@ -77,8 +83,7 @@ def reach_candidates(body, pose, proposals, min_confidence: float, near: float =
         lower = float(np.linalg.norm(rest[end] - rest[mid]))
         ends = _class_proposals(pos, ok, names[2])
         mids = _class_proposals(pos, ok, names[1])
-        kind = names[2][2:]
-        both_ends = joints[[JOINT_INDEX["l_" + kind], JOINT_INDEX["r_" + kind]]]
+        both_ends = joints[_class_ids(names[2])]
         for p in ends:
             if (np.linalg.norm(both_ends - p, axis=1).min() < near
                     or np.linalg.norm(p - joints[root]) > upper + lower + REACH_SLACK):
