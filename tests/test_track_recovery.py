@@ -77,9 +77,16 @@ def test_the_start_check_keeps_the_heading_its_score_prefers():
     check = state.init_info["heading_check"]
     assert check["kept"] == "initial" and check["by"] == "unexplained" and not poses.any()
     assert poses.shape == (4, 48) and check["energy_turned"] == 1.15
+    assert check["ambiguous"]                           # 0.10 against 0.11: within 10 %
     by_energy = TrackerSettings(heading={"start_by": "energy"})
     state, poses = settle_heading(start, depths, track, turn, by_energy)
     assert state.init_info["heading_check"]["kept"] == "turned" and (poses == 1.0).all()
+    assert state.init_info["heading_check"]["ambiguous"] is False   # margin 0: never close
+    clear = {0.0: {"unexplained": 0.10, "energy": 1.2}, 1.0: {"unexplained": 0.2, "energy": 1.3}}
+    state, _ = settle_heading(start, depths, lambda st, f: (st, np.tile(st.pose, (len(f), 1)),
+                                                             clear[float(st.pose[0])]),
+                              turn, by_share)
+    assert state.init_info["heading_check"]["ambiguous"] is False
     # a lead within the margin keeps the start's heading
     close = TrackerSettings(heading={"start_by": "energy", "energy_margin": 0.05})
     state, _ = settle_heading(start, depths, track, turn, close)

@@ -1,6 +1,7 @@
 """The tracker fits the body shape to its first frames, writes body.json, and frees its GL objects."""
 import dataclasses
 import gc
+import json
 
 import numpy as np
 import pytest
@@ -69,6 +70,12 @@ def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, t
     # over) and that pose stays out of summary.json
     assert fit["frames_used"][0] == 0 and "start_pose" not in fit
     assert summary["initialisation_details"]["mode"] == "given pose"
+    # ... and how the trial's start went is kept beside it (its candidates and finalists;
+    # its front/back check too, off here)
+    trial = summary["initialisation_details"]["trial_start"]
+    assert trial["mode"] == "automatic" and "start_info" not in fit
+    assert trial["candidates"] > 0 and len(trial["finalists"]) >= 1
+    json.dumps(summary)                                          # summary.json can hold it
     assert "trial track's frame-0 pose" in summary["initialisation"]
     assert summary["settings"]["shape"]["frames"] == 5
     assert summary["body_height_m"] == pytest.approx(1.75)      # given: not rescaled

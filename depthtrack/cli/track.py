@@ -21,6 +21,7 @@ examples:
   depthtrack track seq_walk -o track_walk --method hc --likelihood pixel --overlay walk.mp4
   depthtrack track seq_walk -o track_walk --shape-fit off      # keep the template's proportions
   depthtrack track seq_walk -o track_walk --settings '{"heading": {"every": 8}}'
+  depthtrack track seq_walk -o track_walk --facing away   # the person starts with their back to us
   depthtrack track recording.mkv -o track_kinect
   depthtrack track realsense.bag -o track_rs --topic /device_0/sensor_0/Depth_0/image/data
 
@@ -35,11 +36,14 @@ second). The body height is read from sequence.json (subject.height_m), or else 
 the first frame with a person by the likelihood (a few seconds). Then the person's
 proportions and girth are fitted to four of the first 16 frames, tracked with the
 template, and the whole sequence is tracked with the fitted body (--shape-fit off keeps
-the template's proportions; see the README, "Body shape"). After the automatic start, the pose and its twin facing
-the other way are both tracked for ten frames and the better kept (a depth image barely
-tells front from back). Frames without a person (an empty room, the subject gone) get no
-pose; tracking starts again when someone appears. --export also writes OUT/exports/
-(track.glb, track.c3d, joints.json, ...; see `depthtrack export --help`)."""
+the template's proportions; see the README, "Body shape"). After the automatic start, the
+pose and its twin facing the other way are both tracked for ten frames and the better kept
+(a depth image barely tells front from back); when that was a close call, summary.json's
+heading_check says "ambiguous": true and the command says so: if the track then faces the
+wrong way, --facing camera (or away) tells the tracker which way the person faces at the
+start. Frames without a person (an empty room, the subject gone) get no pose; tracking
+starts again when someone appears. --export also writes OUT/exports/ (track.glb,
+track.c3d, joints.json, ...; see `depthtrack export --help`)."""
 
 OVERLAY_SUFFIXES = (".mp4", ".gif")
 
@@ -65,6 +69,9 @@ def register(subparsers) -> None:
     p.add_argument("--shape-fit", choices=("on", "off"), default=None,
                    help="on (default): fit the body's shape (segment lengths, widths, girth) to "
                         "the first 16 frames before tracking; off: the template's proportions")
+    p.add_argument("--facing", choices=("auto", "camera", "away"), default=None,
+                   help="which way the person faces at the start, when you know: camera or away "
+                        "(no front/back guess), or auto (default: the tracker decides)")
     p.add_argument("--settings", metavar="JSON", default=None,
                    help="tracker settings, a file or JSON text: an object of setting groups as summary.json's "
                         "\"settings\" holds them (only the fields to change, e.g. "
@@ -100,7 +107,8 @@ def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
 
 
 def _settings(args):
-    """The tracker settings the options ask for (``--settings``, then ``--shape-fit``)."""
+    """The tracker settings the options ask for (``--settings``, then ``--shape-fit`` and
+    ``--facing``)."""
     import dataclasses
 
     from ..body.shape import read_json_source
@@ -120,6 +128,8 @@ def _settings(args):
             raise InputError(path, exc.problem) from None
     if getattr(args, "shape_fit", None) is not None:
         s = s.replace(shape=dataclasses.replace(s.shape, enabled=args.shape_fit == "on"))
+    if getattr(args, "facing", None) is not None:
+        s = s.replace(start=dataclasses.replace(s.start, facing=args.facing))
     return s
 
 
@@ -168,4 +178,11 @@ def run(args) -> int:
               f"({t['fps_excluding_init']:.2f} after initialisation) -> {out}", file=sys.stderr)
         if overlay is not None:
             print(f"overlay: {summary['overlay']}", file=sys.stderr)
+        details = summary.get("initialisation_details") or {}
+        check = (details.get("heading_check")
+                 or (details.get("trial_start") or {}).get("heading_check") or {})
+        if check.get("ambiguous"):
+            print(f"note: front or back was a close call at the start (kept the "
+                  f"{check['kept']} heading); if the track faces the wrong way, rerun with "
+                  f"--facing camera or --facing away", file=sys.stderr)
     return 0

@@ -181,7 +181,10 @@ def settle_heading(start, depths, track, turn, settings):
     Returns
     -------
     None when the initial pose's track was dropped (no decision), else
-    ``(state, poses (K+1, 48))``: the kept track, the start frame's pose first.
+    ``(state, poses (K+1, 48))``: the kept track, the start frame's pose first. Its
+    ``init_info["heading_check"]`` holds both scores, the choice, and ``ambiguous``: whether
+    the two scores were within the margin of each other (either way round), a decision the
+    user may want to make (:attr:`StartSettings.facing`).
     """
     h = settings.heading
     a = track(start, depths)
@@ -201,12 +204,16 @@ def settle_heading(start, depths, track, turn, settings):
     def rounded(score, key):
         return None if score is None else round(score[key], 4)
 
+    # a close call either way: the kept heading's score within the margin of the other's
+    ambiguous = b is not None and abs(score_b[h.start_by] - score_a[h.start_by]) < \
+        margin * max(score_a[h.start_by], score_b[h.start_by])
     info = {**state.init_info, "heading_check": {
         "frames": len(depths), "by": h.start_by,
         "unexplained_initial": rounded(score_a, "unexplained"),
         "unexplained_turned": rounded(score_b, "unexplained"),
         "energy_initial": rounded(score_a, "energy"),
-        "energy_turned": rounded(score_b, "energy"), "kept": choice}}
+        "energy_turned": rounded(score_b, "energy"), "kept": choice,
+        "ambiguous": bool(ambiguous)}}
     return state.replace(init_info=info), poses
 
 

@@ -171,7 +171,9 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     info : dict
         ``fitted`` (bool), ``frames_tracked``, ``frames_used``, ``seconds`` (tracking and
         fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
-        a pose, ``start_pose``: its pose (48 floats) refined with the fitted body.
+        a pose, ``start_pose``: its pose (48 floats) refined with the fitted body, and
+        ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
+        the front/back check).
     """
     from .shape_fit import fit_shape
     from .tracker import Tracker
@@ -184,6 +186,7 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     with Tracker(body, camera, method=method, fps=fps, settings=settings,
                  segmenter=segmenter) as tracker:
         tracked = [(i, x) for i, x in tracker.stream(depths) if x is not None]
+        start = dict(tracker.state.init_info)
     info = {"fitted": False, "frames_tracked": len(depths)}
     if len(tracked) < s.fit_frames:
         info.update(reason=f"{len(tracked)} of the first {len(depths)} frames got a pose; "
@@ -209,4 +212,5 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         # and so keeps the trial's front/back decision (re-deciding it with a body a few
         # millimetres different flipped whole tracks on near-ties; README "Body shape")
         info["start_pose"] = fit.poses[0].tolist()
+        info["start_info"] = start
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info

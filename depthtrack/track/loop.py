@@ -36,7 +36,8 @@ def stream_poses(tracker, frames, init_pose=None):
         Start from this pose on frame 0 (ablation: ground-truth initialisation).
     """
     s = tracker.settings
-    K = s.heading.frames
+    # no front/back check where the user said which way the person faces
+    K = s.heading.frames if s.start.facing == "auto" else 0
     source = iter(frames)
     pending = collections.deque()   # frames read ahead and given back
     held = []              # (index, pose) not yet yielded: the track may still drop them

@@ -105,6 +105,7 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
                                           fit_scale=not seq.subject_height,
                                           method="hc" if method == "hc" else "hc+ep")
     start_pose = shape_info.pop("start_pose", None)
+    trial_start = shape_info.pop("start_info", None)
     if init_from_groundtruth:
         init_pose = fit_pose_to_joints(body, seq.joints[0])
     elif start_pose is not None:
@@ -127,7 +128,10 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
                            if init_from_groundtruth else "automatic (no ground truth used)"
                            + ("; the re-track after the shape fit starts from the trial "
                               "track's frame-0 pose" if init_pose is not None else "")),
-        "initialisation_details": info["initialisation"],
+        # the re-track's own start is the given pose; the trial's start says how it was found
+        "initialisation_details": {**info["initialisation"],
+                                   **({"trial_start": trial_start}
+                                      if init_pose is not None and trial_start else {})},
         "body_height_m": round(float(body.height), 3) if shape_info["fitted"] else height["height_m"],
         "body_height_source": source,
         "body_height_fit": {k: v for k, v in height.items() if k not in ("height_m", "source")} or None,

@@ -27,8 +27,9 @@ from .setting_checks import check as _check
 from .setting_checks import positive as _positive
 from .setting_checks import power_of_two as _power_of_two
 # the groups of a start are defined in start_settings.py; import every group from here
-from .start_settings import (START_SCORES, START_TWINS, TWIN_STARTS,  # noqa: F401
-                             HeadingSettings, HeightSettings, ShapeSettings, StartSettings)
+from .start_settings import (FACINGS, START_SCORES,  # noqa: F401
+                             START_TWINS, TWIN_STARTS, HeadingSettings, HeightSettings,
+                             ShapeSettings, StartSettings)
 
 
 @dataclass(frozen=True)

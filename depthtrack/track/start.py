@@ -77,12 +77,12 @@ def facing_penalty(poses, kappa: float, up=None, heading=None):
     """Initial-heading prior ``kappa (1 - cos theta) / 2`` for poses ``(N, 48) -> (N,)``.
 
     ``theta``: angle between the body's forward direction and the direction from the pelvis
-    to the camera (a start) or ``heading (3,)``, the last tracked forward direction (a
-    recovery: bodies keep their heading); plus the same term for the angle between the head
-    direction and ``up`` (upside-down bodies are rare). A depth image barely tells a body's
-    front from its back; people mostly face the camera when a capture starts, so among fits
-    of nearly equal likelihood the one facing the camera wins. ``kappa`` is
-    :attr:`StartSettings.facing_prior` times the foreground's pixel count.
+    to the camera (a start) or ``heading (3,)`` (or one per pose, ``(N, 3)``), the last
+    tracked forward direction (a recovery: bodies keep their heading); plus the same term for
+    the angle between the head direction and ``up`` (upside-down bodies are rare). A depth
+    image barely tells a body's front from its back; people mostly face the camera when a
+    capture starts, so among fits of nearly equal likelihood the one facing the camera wins.
+    ``kappa`` is :attr:`StartSettings.facing_prior` times the foreground's pixel count.
     """
     poses = np.atleast_2d(poses)
     R = rotvec_to_matrix(poses[:, 3:6])
@@ -91,10 +91,33 @@ def facing_penalty(poses, kappa: float, up=None, heading=None):
     if heading is None:
         reference = -poses[:, 0:3] / np.linalg.norm(poses[:, 0:3], axis=1, keepdims=True)
     else:
-        reference = np.asarray(heading)[None]
+        reference = np.asarray(heading, dtype=np.float64).reshape(-1, 3)   # (1 or N, 3)
     cos_face = np.sum(forward * reference, axis=1)
     cos_up = head @ up if up is not None else np.ones(len(poses))
     return kappa * 0.5 * ((1.0 - cos_face) + (1.0 - cos_up))
+
+
+def _away_from_camera(poses):
+    """``(N, 3)``: the unit direction from the camera to each pose's pelvis."""
+    t = np.atleast_2d(poses)[:, 0:3]
+    return t / np.linalg.norm(t, axis=1, keepdims=True)
+
+
+def wrong_side(poses, facing: str, up) -> np.ndarray:
+    """``(N,) bool``: which poses ``(N, 48)`` face the other side than the user's ``facing``
+    (:attr:`StartSettings.facing`): their forward direction and the direction from the pelvis
+    to the camera, both flattened onto the floor (normal ``up (3,)``), point into opposite
+    half-planes for ``"camera"``, the same one for ``"away"``; none for ``"auto"``."""
+    poses = np.atleast_2d(poses)
+    if facing == "auto":
+        return np.zeros(len(poses), dtype=bool)
+    up = np.asarray(up, dtype=np.float64)
+    forward = rotvec_to_matrix(poses[:, 3:6]) @ MODEL_FORWARD
+    to_camera = -poses[:, 0:3]
+    forward = forward - (forward @ up)[:, None] * up
+    to_camera = to_camera - (to_camera @ up)[:, None] * up
+    towards = np.sum(forward * to_camera, axis=1) > 0
+    return ~towards if facing == "camera" else towards
 
 
 def candidate_poses(points, up, centre, render_body, settings):
@@ -177,6 +200,12 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
     energies = energy(poses)
     prior_up = up if body_axis is None else np.asarray(body_axis, dtype=np.float64)
     facing = facing_penalty(poses, kappa, prior_up, heading)
+    # the user's facing (a start only; a recovery keeps the tracked heading): a pose facing
+    # the other side costs more than any fit could gain (the energy is at most ~1 per pixel)
+    told = g.facing if heading is None else "auto"
+    if told == "away":
+        facing = facing_penalty(poses, kappa, prior_up, _away_from_camera(poses))
+    facing = facing + 2.0 * pixels * wrong_side(poses, told, up)
     order = np.argsort(energies + facing)
     shortlist = list(order[:g.shortlist])
     ours = [i for i in order if i >= n_grid]
@@ -201,7 +230,10 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
         if tracker.method != "hc" and tracker.detector is not None:
             x, e, _ = associate_stage(tracker, energy, frame, x, e)
             x, e = climb(energy, climber, x, rec, start_energy=e, level_offset=g.associate_level)
-        score = e + float(facing_penalty(x[None], kappa, prior_up, heading)[0])
+        score = e + float(facing_penalty(x[None], kappa, prior_up,
+                                         _away_from_camera(x[None])[0] if told == "away"
+                                         else heading)[0])
+        score += 2.0 * pixels * float(wrong_side(x[None], told, up)[0])
         if proposals is not None:
             off, _ = disagreement(tracker.body.joint_positions(x), proposals, p.min_confidence,
                                   p.distance)
@@ -217,5 +249,5 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
             "chosen_from": "proposals" if i >= n_grid else "grid",
             "chosen_orientation": int(i % n_rot) if i < n_grid else None,
             "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
-            "finalists": finalists}
+            "finalists": finalists, "facing": told}
     return x, e, info

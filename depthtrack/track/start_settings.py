@@ -11,6 +11,10 @@ from .setting_checks import positive as _positive
 from .setting_checks import power_of_two as _power_of_two
 
 
+#: Which way the person faces at the start (:attr:`StartSettings.facing`).
+FACINGS = ("auto", "camera", "away")
+
+
 @dataclass(frozen=True)
 class StartSettings:
     """The global search of an automatic start and of a recovery (:mod:`.start`).
@@ -38,6 +42,16 @@ class StartSettings:
         The visible surface lies in front of the body's centre: metres pushed back along the ray.
     axial_shifts : tuple of float
         Shifts (m) along the body's long axis tried for every candidate.
+    facing : {"auto", "camera", "away"}
+        Which way the person faces at the start, when the user knows (:data:`FACINGS`).
+        ``"auto"``: the search decides, preferring the camera (``facing_prior``), and the
+        front/back check after the start may turn it (:class:`HeadingSettings`). ``"camera"``
+        (``"away"``): only poses whose front faces the camera's (the far) side of the
+        vertical plane through the person and perpendicular to the line of sight may start,
+        and the check is skipped: a depth image barely tells front from back, and where the
+        two headings explain it within a few percent the automatic decision is a coin flip
+        (dev: overhead on Azure NFOV from 240 degrees, two seeds of three tracked back to
+        front for the whole clip). A recovery keeps the last tracked heading either way.
     """
 
     passes: int = 3
@@ -53,8 +67,11 @@ class StartSettings:
     associate_level: int = 1
     centre_push: float = 0.08
     axial_shifts: tuple = (0.0, -0.3, -0.15, 0.15, 0.3)
+    facing: str = "auto"
 
     def __post_init__(self):
+        _check(self.facing in FACINGS, f"StartSettings.facing must be one of "
+                                       f"{', '.join(FACINGS)}, not {self.facing!r}")
         _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
                   "root_passes", "finalists")
         _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",

@@ -1,0 +1,85 @@
+"""The user's facing (``--facing``, :attr:`StartSettings.facing`): the start faces the side
+the user names and skips the front/back check, on a synthetic sequence of a person with
+their back to the camera."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.io import open_sequence
+from depthtrack.synth.generate import synthesize_procedural
+from depthtrack.track import TrackerSettings
+from depthtrack.track.heading import facing_direction
+from depthtrack.track.start import wrong_side
+from depthtrack.track.tracker import Tracker
+
+
+@pytest.fixture(scope="module")
+def from_behind(tmp_path_factory):
+    """10 frames of a half squat filmed from behind (SR4000, ToF noise)."""
+    d = tmp_path_factory.mktemp("behind") / "seq"
+    synthesize_procedural("squat", d, start=0.6, seconds=0.4, seed=3, azimuth=180)
+    return d
+
+
+def _towards_camera(pose):
+    """Cosine between the pose's forward direction and the way to the camera, flattened."""
+    f = facing_direction(pose)
+    t = -np.asarray(pose[:3], dtype=np.float64)
+    f[1] = t[1] = 0.0                                  # camera y is (nearly) vertical here
+    return float(f @ t / np.linalg.norm(f) / np.linalg.norm(t))
+
+
+def test_wrong_side_is_the_half_plane_the_user_did_not_name():
+    up = np.array([0.0, -1.0, 0.0])
+    facing_camera = np.zeros(48)
+    facing_camera[2] = 3.0
+    assert _towards_camera(facing_camera) > 0.9        # the rest pose faces the camera
+    away = facing_camera.copy()
+    away[3:6] = [0.0, np.pi, 0.0]
+    side = facing_camera.copy()
+    side[3:6] = [0.0, 1.4, 0.0]                         # 80 degrees: still the camera's side
+    poses = np.stack([facing_camera, away, side])
+    assert wrong_side(poses, "camera", up).tolist() == [False, True, False]
+    assert wrong_side(poses, "away", up).tolist() == [True, False, True]
+    assert not wrong_side(poses, "auto", up).any()
+
+
+def test_facing_away_starts_from_behind_and_skips_the_check(from_behind):
+    seq = open_sequence(from_behind)
+    body = BodyModel.default(height=seq.subject_height or 1.75)
+    truth = seq.joints
+    results = {}
+    for facing in ("away", "camera"):
+        settings = TrackerSettings(start={"facing": facing})
+        with Tracker(body, seq.camera, fps=seq.fps, settings=settings) as tracker:
+            result = tracker.track_sequence(seq)
+            info = tracker.state.init_info
+        assert info["facing"] == facing and "heading_check" not in info
+        results[facing] = (result, np.linalg.norm(result.joints - truth, axis=-1).mean(axis=-1))
+    away, err_away = results["away"]
+    assert _towards_camera(away.poses[0]) < -0.5       # the back to the camera, as told
+    assert err_away.max() < 0.1
+    camera, err_camera = results["camera"]
+    assert _towards_camera(camera.poses[0]) > 0.0      # told so, the start faces the camera
+    assert err_camera[0] > 0.15                         # ... which is wrong here
+
+
+def test_the_cli_passes_facing_into_the_settings(from_behind, tmp_path):
+    out = tmp_path / "track"
+    run = subprocess.run([sys.executable, "-m", "depthtrack", "track", str(from_behind), "-o",
+                          str(out), "--facing", "away", "--shape-fit", "off", "--quiet"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["settings"]["start"]["facing"] == "away"
+    assert summary["initialisation_details"]["facing"] == "away"
+    bad = subprocess.run([sys.executable, "-m", "depthtrack", "track", str(from_behind), "-o",
+                          str(tmp_path / "bad"), "--settings", '{"start": {"facing": "left"}}'],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "facing" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "bad").exists()
