@@ -83,3 +83,36 @@ def test_the_cli_passes_facing_into_the_settings(from_behind, tmp_path):
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
     assert "facing" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "bad").exists()
+
+
+def test_eval_tracks_with_the_facing_given(from_behind, tmp_path):
+    tracks = tmp_path / "tracks"
+    run = subprocess.run([sys.executable, "-m", "depthtrack", "eval", str(from_behind),
+                          "--methods", "hc", "--facing", "away", "--tracks-out", str(tracks),
+                          "--json", "--quiet"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    summary = json.loads((tracks / "seq" / "hc" / "summary.json").read_text())
+    assert summary["settings"]["start"]["facing"] == "away"
+    assert summary["initialisation_details"]["facing"] == "away"
+    scored = json.loads(run.stdout)["sequences"]["seq"]["hc"]
+    assert scored["within_10cm"] > 0.6            # back to front it would be about 20 %
+    # scoring existing tracks takes no tracker settings: refused in one line, exit 2
+    bad = subprocess.run([sys.executable, "-m", "depthtrack", "eval", str(from_behind), "--track",
+                          str(tracks / "seq" / "hc"), "--facing", "away"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
+    assert "--facing" in bad.stderr
+
+
+def test_the_benchmark_reads_the_facing_off_the_truth(from_behind, tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "benchmark", Path(__file__).resolve().parents[1] / "tools" / "benchmark.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    assert tool.facing_from_truth(from_behind) == "away"
+    front = tmp_path / "front"
+    synthesize_procedural("squat", front, start=0.6, seconds=0.08, seed=3, azimuth=30)
+    assert tool.facing_from_truth(front) == "camera"

@@ -117,7 +117,7 @@ def test_fit_body_shape_hands_over_frame_0s_pose(shaped_sequence):
 def test_shape_fit_option_sets_the_settings():
     from types import SimpleNamespace
 
-    from depthtrack.cli.track import _settings
+    from depthtrack.cli.track import tracker_settings as _settings
 
     assert _settings(SimpleNamespace(shape_fit="off")).shape.enabled is False
     assert _settings(SimpleNamespace(shape_fit="on")).shape.enabled is True

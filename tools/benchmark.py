@@ -270,6 +270,9 @@ def markdown(report: dict) -> str:
            f"{report['wall_s']:.0f} s wall.", "",
            "Motions: " + ", ".join(f"`{m['name']}` ({m['kind']}, start {m['start_s']:g} s)"
                                    for m in report["motions"]), "",
+           *(["**ABLATION: the tracker was told which way each person faces at the start "
+              "(`--facing`, read off the ground truth of frame 0).**", ""]
+             if report.get("facing_from_truth") else []),
            "## Overall (each motion-condition group weighs the same; ± = spread over seeds)", "",
            "| method | within 10 cm | mean error (cm) | max error (cm) | marker avg (cm) | fps (mean) | "
            "worst group within 10 cm | slowest sequence fps |",
@@ -321,6 +324,26 @@ def markdown(report: dict) -> str:
     return "\n".join(out)
 
 
+def facing_from_truth(path) -> str:
+    """``"camera"`` or ``"away"``: which way the person of the sequence at ``path`` faces on
+    frame 0, from its ground-truth joints (their forward direction, flattened across the
+    trunk's axis, against the direction to the camera). Only for the ``--facing-from-truth``
+    ablation: what a user who looked at the recording would tell the tracker."""
+    import numpy as np
+
+    from depthtrack.contract import JOINT_INDEX as J
+    from depthtrack.io import open_sequence
+
+    j = np.asarray(open_sequence(path).joints[0], dtype=np.float64)
+    up = j[J["neck"]] - j[J["pelvis"]]
+    up /= np.linalg.norm(up)
+    across = (j[J["l_hip"]] - j[J["r_hip"]]) + (j[J["l_shoulder"]] - j[J["r_shoulder"]])
+    forward = np.cross(across, up)                 # left x up: the way the chest faces
+    to_camera = -j[J["pelvis"]]
+    to_camera -= (to_camera @ up) * up
+    return "camera" if forward @ to_camera > 0 else "away"
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -342,6 +365,10 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=1,
                         help="motion-condition groups run at once (default 1; frame rates are "
                              "then shared-machine figures)")
+    parser.add_argument("--facing-from-truth", action="store_true",
+                        help="ABLATION: tell the tracker which way the person faces at the start "
+                             "(depthtrack eval --facing, read off the ground truth of frame 0), as "
+                             "a user who looked at the recording would; the report says so")
     parser.add_argument("--keep-tracks", action="store_true",
                         help="also keep every track (OUT/SPLIT/tracks/SEQUENCE/METHOD/), to look at the failures")
     args = parser.parse_args(argv)
@@ -398,6 +425,9 @@ def main(argv=None) -> int:
             group.append((seq_name, path, synth, seed, s_index))
         evaluate = ["depthtrack", "eval", *[shown(g[1]) for g in group], "--methods", ",".join(methods),
                     "--json", "--quiet"]
+        facing = facing_from_truth(group[0][1]) if args.facing_from_truth else None
+        if facing is not None:
+            evaluate += ["--facing", facing]
         if args.keep_tracks:
             evaluate += ["--tracks-out", shown(out / "tracks"), "--force"]
         result = json.loads(run_depthtrack(evaluate))["sequences"]
@@ -405,6 +435,7 @@ def main(argv=None) -> int:
                     "condition": cond, "condition_label": condition_label(cond),
                     "seed": seed, "seed_index": s_index, "start_s": start,
                     "synth_command": shlex.join(synth), "eval_command": shlex.join(evaluate),
+                    "facing_given": facing,
                     "metrics": {m: result[seq_name][m] for m in methods}}
                    for seq_name, path, synth, seed, s_index in group]
         if args.keep_tracks:
@@ -436,6 +467,7 @@ def main(argv=None) -> int:
         "command": command, "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "machine": f"{os.cpu_count()} CPUs", "commit": commit, "seconds": seconds, "fps": FPS,
         "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0, "jobs": args.jobs,
+        "facing_from_truth": bool(args.facing_from_truth),
         "motions": [{"name": n, "kind": k, "source": s, "start_s": st} for n, k, s, st, _ in plan],
         "conditions": conditions, "sequences": sequences, "groups": groups, "overall": overall,
         "by_condition": by_condition(sequences, methods),

@@ -72,6 +72,11 @@ def register(subparsers) -> None:
                         "(tcp://HOST:8786) or 'local' for a LocalCluster on this machine")
     p.add_argument("--tracks-out", metavar="DIR", default=None,
                    help="also write each track to DIR/SEQUENCE/METHOD/ (as `depthtrack track` does)")
+    p.add_argument("--facing", choices=("auto", "camera", "away"), default=None,
+                   help="which way the person faces at the start of every sequence, when you "
+                        "know (see depthtrack track --help)")
+    p.add_argument("--settings", metavar="JSON", default=None,
+                   help="tracker settings for every sequence, as for depthtrack track")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_reader_options(p)
     add_force(p, "the --report directory")
@@ -92,11 +97,17 @@ def run(args) -> int:
     if args.tracks_out is not None and Path(args.tracks_out).exists() and not Path(args.tracks_out).is_dir():
         raise InputError(args.tracks_out, "exists and is not a directory")
     executor = "dask" if args.dask else ("workers" if args.workers else "serial")
+    settings = None
+    if args.settings is not None or args.facing is not None:
+        if args.track is not None:
+            raise InputError(None, "--settings and --facing apply to tracking, not to --track")
+        from .track import tracker_settings
+        settings = tracker_settings(args)
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,
                           track_dirs=args.track, quiet=args.quiet, open_options=reader_options(args),
                           log=None if args.quiet else print_line, executor=executor,
                           workers=args.workers, dask_address=args.dask, tracks_out=args.tracks_out,
-                          keep_going=True)
+                          keep_going=True, settings=settings)
     for failure in evaluation.failures:
         print(f"depthtrack eval: {failure.message}" if failure.bad_input
               else f"depthtrack eval: {failure.path}: {failure.message}", file=sys.stderr)

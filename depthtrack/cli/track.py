@@ -106,7 +106,7 @@ def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
     write_text_atomic(out / "summary.json", summary_json_text(written_summary))
 
 
-def _settings(args):
+def tracker_settings(args):
     """The tracker settings the options ask for (``--settings``, then ``--shape-fit`` and
     ``--facing``)."""
     import dataclasses
@@ -157,7 +157,7 @@ def run(args) -> int:
     with Progress(len(seq), "frames", quiet=args.quiet) as progress:
         result, body, summary = run_tracking(seq, method=args.method, likelihood=args.likelihood,
                                              init_from_groundtruth=args.init_from_groundtruth,
-                                             progress=progress, settings=_settings(args))
+                                             progress=progress, settings=tracker_settings(args))
     from ..io.track_output import write_track
 
     summary["sequence"] = str(seq.path)

@@ -60,6 +60,8 @@ class SequenceTask:
         A per-frame progress meter on a terminal (serial runs only: parallel meters garble).
     open_options : dict
         Reader options for :func:`depthtrack.io.registry.open_sequence` (``topic``, ...).
+    settings : TrackerSettings or None
+        The tracker's settings (a frozen dataclass, picklable; None = the defaults).
     """
 
     index: int
@@ -70,6 +72,7 @@ class SequenceTask:
     tracks_dir: str | None = None
     progress: bool = False
     open_options: dict = field(default_factory=dict)
+    settings: object = None
 
 
 @dataclass
@@ -112,8 +115,8 @@ def evaluate_sequence(task: SequenceTask) -> list:
         masks = person_masks(seq)          # segmented once per sequence, for all its methods
         results = []
         for method in task.methods:
-            joints, poses, body, seconds, summary = runs.track_sequence(seq, method, task.likelihood,
-                                                                         not task.progress)
+            joints, poses, body, seconds, summary = runs.track_sequence(
+                seq, method, task.likelihood, not task.progress, settings=task.settings)
             result = runs.score(task.name, method, seq, joints, poses, body, seconds,
                                 masks=masks)
             result.track_summary = dict(summary)

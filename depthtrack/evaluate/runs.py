@@ -266,9 +266,11 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=
                         fit=per_frame)
 
 
-def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool = True):
+def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool = True,
+                   settings=None):
     """Track a sequence as ``depthtrack track`` does (:func:`depthtrack.track.run.run_tracking`:
-    automatic initialisation, body height from sequence.json or estimated; no ground truth).
+    automatic initialisation, body height from sequence.json or estimated; no ground truth),
+    with ``settings`` (:class:`~depthtrack.track.TrackerSettings`; None = the defaults).
 
     Returns
     -------
@@ -286,7 +288,7 @@ def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool =
     start = time.perf_counter()
     with Progress(len(seq), f"{method} frames", quiet=quiet) as progress:
         result, body, summary = run_tracking(seq, method=method, likelihood=likelihood,
-                                             progress=progress)
+                                             progress=progress, settings=settings)
     seconds = summary.get("seconds") or (time.perf_counter() - start)
     return (np.asarray(result.joints, float), np.asarray(result.poses, float), body, float(seconds),
             summary)
@@ -295,7 +297,7 @@ def track_sequence(seq, method: str, likelihood: str = "smoothed", quiet: bool =
 def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", track_dirs=None,
              quiet: bool = True, log=None, open_options=None, executor: str = "serial",
              workers: int | None = None, dask_address: str | None = None, tracks_out=None,
-             keep_going: bool = False) -> Evaluation:
+             keep_going: bool = False, settings=None) -> Evaluation:
     """Track and score sequences (or score existing tracks).
 
     Parameters
@@ -324,6 +326,8 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
     keep_going : bool
         False (default): the first sequence that fails raises. True (``depthtrack eval``):
         it is recorded in ``Evaluation.failures`` and the others run on.
+    settings : TrackerSettings or None
+        The tracker's settings for every sequence (None = the defaults).
 
     Raises
     ------
@@ -400,7 +404,7 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
     tasks = [SequenceTask(i, p, sequence_name(p), tuple(methods), likelihood,
                           None if tracks_out is None else str(Path(tracks_out)),
                           progress=executor == "serial" and not quiet,
-                          open_options=dict(open_options or {}))
+                          open_options=dict(open_options or {}), settings=settings)
              for i, p in enumerate(unique)]
     results, failures = run_tasks(tasks, executor, workers=workers, address=dask_address, log=log,
                                   keep_going=keep_going)
