@@ -307,3 +307,35 @@ def test_a_lost_track_is_recovered_within_five_frames_and_reported(squat):
     back = rec[-1]["frame"] + rec[-1]["frames_to_recover"]
     assert back - lose <= 5
     assert err[lose + 5:].max() < 0.1
+
+
+def test_a_start_waits_for_the_whole_person_and_tracks_the_frames_before_backwards(squat):
+    """The first three frames show only the upper body (the rest out of view): with
+    ``complete_fraction`` the start waits for the whole person and the frames before it are
+    tracked backwards from there."""
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    depths = [squat.depth(i).copy() for i in range(len(squat))]
+    c = squat.camera
+    knee_rows = c.fy * truth[:3, 10, 1] / truth[:3, 10, 2] + c.cy      # l_knee's image row
+    for k in range(3):
+        depths[k][int(knee_rows[k]) - 25:] = 0.0                          # hips and legs gone
+    settings = TrackerSettings(start={"complete_fraction": 0.7})
+    with Tracker(body, c, fps=squat.fps, settings=settings) as tracker:
+        poses = dict(tracker.stream(depths))
+        info = tracker.state.init_info
+    assert info["deferred_frames"] == 3
+    assert sorted(poses) == list(range(len(squat))) and all(p is not None for p in poses.values())
+    joints = np.array([body.joint_positions(poses[i]) for i in range(len(squat))])
+    err = _errors(joints, truth)
+    assert err[3:].max() < 0.1                    # the start on the whole person holds
+    # the backward track reached frame 0 (its frames are the last three tracked, in reverse)
+    assert _errors(joints[2:3], truth[2:3])[0] < 1.0 and np.isfinite(joints[:3]).all()
+    # off: the start is on frame 0, the upper body alone
+    with Tracker(body, c, fps=squat.fps,
+                 settings=TrackerSettings(start={"complete_fraction": 0.0})) as tracker:
+        poses_off = dict(tracker.stream(depths))
+        assert "deferred_frames" not in tracker.state.init_info
+    assert sorted(poses_off) == list(range(len(squat)))
+    with pytest.raises(ValueError, match="complete_fraction"):
+        TrackerSettings(start={"complete_fraction": 1.5})

@@ -14,7 +14,7 @@ import itertools
 import numpy as np
 
 from .heading import settle_heading
-from .observe import as_depth, person_present
+from .observe import as_depth, person_present, visible_area
 from .settings import TrackerSettings
 from .state import TrackedFrame
 from .tracker import Tracker
@@ -65,7 +65,12 @@ def stream_poses(tracker, frames, init_pose=None):
                     frames_without_person=tracker.state.frames_without_person + 1)
                 held.append((i, None))
             else:
+                early = []
+                if s.start.complete_fraction > 0:
+                    depth, fg, early = _complete_view(tracker, depth, fg, take, pending)
+                    i += len(early)
                 tracker.state, frame, x = tracker.start(tracker.state, depth, foreground=fg)
+                start_state = tracker.state
                 ahead = take(K) if K > 0 else []
                 settled = None
                 if K > 0 and len(ahead) == K:
@@ -73,16 +78,55 @@ def stream_poses(tracker, frames, init_pose=None):
                                              tracker.turned_start(frame), s)
                 if settled is not None:
                     tracker.state, poses = settled
-                    held.extend((i + k, p) for k, p in enumerate(poses))
+                    started = [(i + k, p) for k, p in enumerate(poses)]
                     i += K
                 else:                       # no check: the frames read ahead come next
-                    held.append((i, x))
+                    started = [(i, x)]
                     pending.extendleft(reversed(ahead))
+                if early:
+                    held.extend(_track_back(tracker, start_state.replace(pose=started[0][1]),
+                                            early, started[0][0] - len(early)))
+                    tracker.state = tracker.state.replace(init_info={
+                        **tracker.state.init_info, "deferred_frames": len(early)})
+                held.extend(started)
         # frames of a streak without a person stay held: a dropped track drops them too
         keep = len(held) - (tracker.state.absent if tracker.state.pose is not None else 0)
         yield from held[:keep]
         del held[:keep]
     yield from held
+
+def _complete_view(tracker, depth, foreground, take, pending):
+    """Where an automatic start waits for more of the person (:attr:`StartSettings.
+    complete_fraction`): ``(depth, foreground or None, early)``, the frame to start on and
+    the frames before it, from this one, to be tracked backwards from the start.
+
+    The next :attr:`StartSettings.complete_frames` frames are read ahead; the start is the
+    first of this frame and them whose person covers at least ``complete_fraction`` of the
+    largest visible area (m^2) among them. Those after it are given back (``pending``).
+    """
+    g = tracker.settings.start
+    camera = tracker.camera
+    ahead = take(g.complete_frames)
+    with tracker.recorder.timed("segment"):
+        areas = [visible_area(foreground, camera)] + [
+            visible_area(tracker.segmenter(d, camera), camera) for d in ahead]
+    need = g.complete_fraction * max(areas)
+    k = next(k for k, a in enumerate(areas) if a >= need)
+    pending.extendleft(reversed(ahead[k:]))
+    if k == 0:
+        return depth, foreground, []
+    return ahead[k - 1], None, [depth, *ahead[:k - 1]]
+
+
+def _track_back(tracker, state, early, first):
+    """``[(index, pose or None), ...]`` of the frames ``early`` (indices ``first`` on) before
+    a deferred start, tracked backwards in time from the start ``state``; None for all of
+    them when that track is dropped. Rechecks and recoveries on the way are not reported."""
+    back = tracker.track_through(state, list(reversed(early)))
+    if back is None:
+        return [(first + k, None) for k in range(len(early))]
+    return [(first + k, p) for k, p in enumerate(back[1][::-1])]
+
 
 def _advance_into(tracker, held, i, depth) -> None:
     """``advance`` on frame ``i`` as the loop does it, appending to ``held``: when the
