@@ -95,6 +95,7 @@ def stream_poses(tracker, frames, init_pose=None):
         del held[:keep]
     yield from held
 
+
 def _complete_view(tracker, depth, foreground, take, pending):
     """Where an automatic start waits for more of the person (:attr:`StartSettings.
     complete_fraction`): ``(depth, foreground or None, early)``, the frame to start on and

@@ -62,7 +62,7 @@ class StartSettings:
         into the camera's range or into its view shows a few limbs first, and a start on
         those lands anywhere (dev: 105_05 on SR4000, the person 5.3 m away on frame 0, past
         the 5 m range, three limbs visible; the start on frame 2 went wrong and the track
-        kept it: 24-48 % of joints within 10 cm; with 0.7, tracked without the shape fit,
+        kept it: 24-48 % of joints within 10 cm; with 0.7, tracked with the template body,
         seeds 1-3 went 68 -> 87, 88 -> 95 and 21 -> 96 %, and 02_03 on Kinect v2 from 120
         degrees, where the person also enters the view, 69 -> 80, 77 -> 73 and 74 %; on the
         other eleven dev motions no start waits, so their tracks are unchanged). 0 = off. A
