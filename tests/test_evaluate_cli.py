@@ -136,7 +136,7 @@ def test_tracking_path_runs_each_method_once_per_sequence(data, monkeypatch, cap
     calls = []
     offsets = {"hc": 0.0, "ep": 0.2}
 
-    def fake_track(seq, method, likelihood, quiet):
+    def fake_track(seq, method, likelihood, quiet, settings=None):
         calls.append((seq.path.name, method, likelihood))
         poses = data["poses"].copy()
         poses[:, 1] += offsets[method]

@@ -23,8 +23,11 @@ from .tracker import Tracker
 def stream_poses(tracker, frames, init_pose=None):
     """Track depth frames from any iterable; yields ``(index, pose (48,) or None)`` in order.
 
-    A pose is yielded as soon as it is final: at once, except after an automatic start
-    (the front/back check tracks the next :attr:`HeadingSettings.frames` frames first)
+    A pose is yielded as soon as it is final: at once, except around an automatic start
+    (it reads the next :attr:`StartSettings.complete_frames` frames to see whether the
+    person is still walking into view, and the front/back check tracks the next
+    :attr:`HeadingSettings.frames` frames; a live stream that must not wait sets
+    ``complete_fraction`` and ``frames`` to 0)
     and while the segmentation misses the person (the track may yet be dropped, and
     then those frames get no pose). Frames without a person get None; tracking
     (re)starts with the automatic start on the next frame with a person.
