@@ -199,14 +199,17 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
     kappa = g.facing_prior * pixels
     energies = energy(poses)
     prior_up = up if body_axis is None else np.asarray(body_axis, dtype=np.float64)
-    facing = facing_penalty(poses, kappa, prior_up, heading)
     # the user's facing (a start only; a recovery keeps the tracked heading): a pose facing
     # the other side costs more than any fit could gain (the energy is at most ~1 per pixel)
     told = g.facing if heading is None else "auto"
-    if told == "away":
-        facing = facing_penalty(poses, kappa, prior_up, _away_from_camera(poses))
-    facing = facing + 2.0 * pixels * wrong_side(poses, told, up)
-    order = np.argsort(energies + facing)
+
+    def heading_cost(x):
+        """``(N,)``: the heading prior of poses ``x (N, 48)`` plus the user's facing."""
+        reference = _away_from_camera(x) if told == "away" else heading
+        return (facing_penalty(x, kappa, prior_up, reference)
+                + 2.0 * pixels * wrong_side(x, told, up))
+
+    order = np.argsort(energies + heading_cost(poses))
     shortlist = list(order[:g.shortlist])
     ours = [i for i in order if i >= n_grid]
     if ours and ours[0] not in shortlist:
@@ -230,10 +233,7 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
         if tracker.method != "hc" and tracker.detector is not None:
             x, e, _ = associate_stage(tracker, energy, frame, x, e)
             x, e = climb(energy, climber, x, rec, start_energy=e, level_offset=g.associate_level)
-        score = e + float(facing_penalty(x[None], kappa, prior_up,
-                                         _away_from_camera(x[None])[0] if told == "away"
-                                         else heading)[0])
-        score += 2.0 * pixels * float(wrong_side(x[None], told, up)[0])
+        score = e + float(heading_cost(x[None])[0])
         if proposals is not None:
             off, _ = disagreement(tracker.body.joint_positions(x), proposals, p.min_confidence,
                                   p.distance)
