@@ -11,7 +11,7 @@ import numpy as np
 from ..camera import Camera
 from ..errors import InputError
 from .context import gl_context, program
-from .tiles import _set_view, enable_depth_test, is_closed_outward, skinned_vertex_buffer
+from .tiles import _set_view, set_draw_state, is_closed_outward, skinned_vertex_buffer
 
 #: Most joints a label image can tell apart (four vec4 varyings of weights).
 MAX_LABEL_JOINTS = 16
@@ -98,14 +98,14 @@ class FrameRenderer:
         self._fbo.use()
         self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
         _, vaos, _, cull = self._body_vaos(body)
-        enable_depth_test(self.ctx, cull)
+        set_draw_state(self.ctx, cull)
         for name in (f"skin_{kind}", f"static_{kind}"):
             _set_view(self._programs[name], self.camera, 1)
         skinned = self._programs[f"skin_{kind}"]
         if "u_first" in skinned:
             skinned["u_first"].value = 0
         vaos[f"skin_{kind}"].render()
-        enable_depth_test(self.ctx, False)      # scenery may be open or wound either way
+        set_draw_state(self.ctx, False)      # scenery may be open or wound either way
         for mesh in extra_meshes:
             vertices, faces = _triangles(mesh)
             if not len(faces):

@@ -71,8 +71,21 @@ def is_closed_outward(vertices, faces) -> bool:
     return bool(mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0)
 
 
-def enable_depth_test(ctx, cull_back_faces: bool) -> None:
-    """Depth test on; back faces culled when asked.
+#: GL_CLIP_DISTANCE0: glEnable(GL_CLIP_DISTANCE0 + i) turns on the shader's gl_ClipDistance[i].
+GL_CLIP_DISTANCE0 = 0x3000
+#: How many clip distances ``project.glsl`` writes (the four edges of a tile).
+TILE_CLIP_PLANES = 4
+
+
+def set_draw_state(ctx, cull_back_faces: bool) -> None:
+    """Depth test on, the four tile-edge clip planes on, back faces culled when asked.
+
+    The clip planes (``gl_ClipDistance[0..3]`` in ``project.glsl``) keep every candidate
+    inside its own tile. GL applies a clip distance only while its ``GL_CLIP_DISTANCEi`` is
+    enabled: Mesa's llvmpipe clipped without it, NVIDIA's driver does not, and there the
+    candidates bled into their neighbours' tiles (``tests/test_render_tiles.py`` failed on
+    an H200). moderngl's ``enable_only`` leaves capabilities it does not know alone, so the
+    planes are enabled directly on every draw.
 
     Our projection writes image row v to framebuffer row v (no flip), which mirrors the
     image vertically, so outward faces wind clockwise on screen: GL's "front" is culled.
@@ -82,6 +95,8 @@ def enable_depth_test(ctx, cull_back_faces: bool) -> None:
         ctx.cull_face = "front"
     else:
         ctx.enable_only(ctx.DEPTH_TEST)
+    for plane in range(TILE_CLIP_PLANES):
+        ctx.enable_direct(GL_CLIP_DISTANCE0 + plane)
 
 
 def skinned_vertex_buffer(ctx, mesh):
@@ -224,7 +239,7 @@ class TileRenderer:
         self._fbo.use()
         self._fbo.viewport = (0, 0, side, side)
         self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0, viewport=(0, 0, side, side))
-        enable_depth_test(self.ctx, self.cull_back_faces)
+        set_draw_state(self.ctx, self.cull_back_faces)
         # programs are shared between renderers: set this renderer's view every pass
         _set_view(self._prog, self.tile_camera, grid)
         self._prog["u_first"].value = first
