@@ -301,6 +301,7 @@ def test_a_lost_track_is_recovered_within_five_frames_and_reported(squat):
     assert err[:lose].max() < 0.1
     rec = info["recoveries"]
     assert rec[0]["frame"] == lose and rec[0]["reason"] == "unexplained"
+    assert rec[0]["index"] == lose                  # init/step: the frames stepped
     # every loss reported closed, the last within 5 frames of the jump (a global search
     # may land a few centimetres off and be judged lost once more)
     assert all(r["frames_to_recover"] is not None for r in rec)
@@ -324,7 +325,15 @@ def test_a_start_waits_for_the_whole_person_and_tracks_the_frames_before_backwar
     with Tracker(body, c, fps=squat.fps, settings=settings) as tracker:
         poses = dict(tracker.stream(depths))
         info = tracker.state.init_info
+        log = tracker.frame_log
+        described = tracker.describe()
     assert info["deferred_frames"] == 3
+    # the forward track's log starts at the start's sequence frame; every event says where
+    assert [f["index"] for f in log] == list(range(3, len(squat)))
+    for key in ("recoveries", "heading_switches", "limb_swaps", "reaches"):
+        for event in described[key]:
+            assert event["index"] == (log[event["frame"]]["index"] if event["frame"] is not None
+                                      else event["index"]) and 0 <= event["index"] < len(squat)
     assert sorted(poses) == list(range(len(squat))) and all(p is not None for p in poses.values())
     joints = np.array([body.joint_positions(poses[i]) for i in range(len(squat))])
     err = _errors(joints, truth)
@@ -339,3 +348,27 @@ def test_a_start_waits_for_the_whole_person_and_tracks_the_frames_before_backwar
     assert sorted(poses_off) == list(range(len(squat)))
     with pytest.raises(ValueError, match="complete_fraction"):
         TrackerSettings(start={"complete_fraction": 1.5})
+
+
+def test_a_backward_tracks_events_get_their_sequence_frames():
+    """The backward track counts its frames on from the start (log index ``start + k`` for
+    the k-th frame back); its events are reported at the sequence frame ``start - k``."""
+    from depthtrack.track.loop import _track_back
+
+    start = TrackingState(log=({"cost": 0.1},) * 5, recoveries=({"frame": 1, "reason": "old"},))
+    back = start.replace(log=start.log + ({"cost": 0.1},) * 3,
+                         recoveries=start.recoveries + ({"frame": 6, "reason": "unexplained",
+                                                         "frames_to_recover": 0},),
+                         reaches=({"frame": 5, "limb": "l_arm"},))
+
+    class Through:                      # the tracker's track_through, with the result above
+        def track_through(self, state, depths):
+            assert state is start and depths == ["d9", "d8", "d7"]
+            return back, np.arange(3)[:, None] * np.ones(48), {}
+
+    frames, events = _track_back(Through(), start, ["d7", "d8", "d9"], 7)
+    assert [i for i, _ in frames] == [7, 8, 9] and frames[0][1][0] == 2   # reversed back
+    assert events["recoveries"] == ({"frame": None, "reason": "unexplained", "frames_to_recover": 0,
+                                     "index": 8, "backward": True},)
+    assert events["reaches"] == ({"frame": None, "limb": "l_arm", "index": 9, "backward": True},)
+    assert events["heading_switches"] == () and events["limb_swaps"] == ()

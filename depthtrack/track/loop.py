@@ -87,11 +87,14 @@ def stream_poses(tracker, frames, init_pose=None):
                     started = [(i, x)]
                     pending.extendleft(reversed(ahead))
                 if early:
-                    held.extend(_track_back(tracker, start_state.replace(pose=started[0][1]),
-                                            early, started[0][0] - len(early)))
+                    back, events = _track_back(tracker, start_state.replace(pose=started[0][1]),
+                                               early, started[0][0] - len(early))
+                    held.extend(back)
                     tracker.state = tracker.state.replace(init_info={
-                        **tracker.state.init_info, "deferred_frames": len(early)})
+                        **tracker.state.init_info, "deferred_frames": len(early)}, **{
+                        key: getattr(tracker.state, key) + found for key, found in events.items()})
                 held.extend(started)
+        _stamp_indices(tracker.state.log, i)
         # frames of a streak without a person stay held: a dropped track drops them too
         keep = len(held) - (tracker.state.absent if tracker.state.pose is not None else 0)
         yield from held[:keep]
@@ -122,14 +125,44 @@ def _complete_view(tracker, depth, foreground, take, pending):
     return ahead[k - 1], None, [depth, *ahead[:k - 1]]
 
 
+#: The state's event lists (each entry a dict with the log index ``frame``) that a backward
+#: track's events join.
+EVENT_LISTS = ("recoveries", "heading_switches", "limb_swaps", "reaches")
+
+
 def _track_back(tracker, state, early, first):
-    """``[(index, pose or None), ...]`` of the frames ``early`` (indices ``first`` on) before
-    a deferred start, tracked backwards in time from the start ``state``; None for all of
-    them when that track is dropped. Rechecks and recoveries on the way are not reported."""
+    """The frames ``early`` (sequence indices ``first`` on) before a deferred start, tracked
+    backwards in time from the start ``state``.
+
+    Returns ``(frames, events)``: ``frames`` ``[(index, pose or None), ...]``, None for all
+    of them when that track is dropped; ``events`` the backward track's new entries of
+    :data:`EVENT_LISTS` (a recovery, a heading switch on the way), each with
+    ``"backward": True``, its sequence ``index``, and ``frame`` None (it counts the forward
+    track's frames).
+    """
     back = tracker.track_through(state, list(reversed(early)))
     if back is None:
-        return [(first + k, None) for k in range(len(early))]
-    return [(first + k, p) for k, p in enumerate(back[1][::-1])]
+        return [(first + k, None) for k in range(len(early))], {}
+    start_log = state.frame - 1                 # the start's log index; backward frame k at start_log + k
+    start_index = first + len(early)
+
+    def moved(event):
+        index = start_index - (event["frame"] - start_log) if event.get("frame") is not None else None
+        return {**event, "frame": None, "index": index, "backward": True}
+    events = {key: tuple(moved(e) for e in getattr(back[0], key)[len(getattr(state, key)):])
+              for key in EVENT_LISTS}
+    return [(first + k, p) for k, p in enumerate(back[1][::-1])], events
+
+
+def _stamp_indices(log, last) -> None:
+    """Give the log entries that have none their sequence frame ``index``: the newest
+    entries are the frames up to ``last``, in order. (In place: an entry's frame never
+    changes, and a twin's log shares its entries with the track it came from.)"""
+    k = len(log)
+    while k > 0 and "index" not in log[k - 1]:
+        k -= 1
+    for j, entry in enumerate(log[k:]):
+        entry["index"] = last - (len(log) - k - 1) + j
 
 
 def _advance_into(tracker, held, i, depth) -> None:

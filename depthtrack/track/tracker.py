@@ -439,12 +439,26 @@ class Tracker:
                 "settings": self.settings.to_dict(), "prior": self.prior.to_dict(),
                 "initialisation": self.state.init_info, "counts": self.counts,
                 # a loss still open at the end: not recovered
-                "recoveries": [dict(r) for r in self.state.recoveries] + (
-                    [{**self.state.lost, "frames_to_recover": None}] if self.state.lost else []),
-                "heading_switches": list(self.state.heading_switches),
-                "limb_swaps": list(self.state.limb_swaps),
-                "reaches": list(self.state.reaches),
+                "recoveries": self._indexed(list(self.state.recoveries) + (
+                    [{**self.state.lost, "frames_to_recover": None}] if self.state.lost else [])),
+                "heading_switches": self._indexed(self.state.heading_switches),
+                "limb_swaps": self._indexed(self.state.limb_swaps),
+                "reaches": self._indexed(self.state.reaches),
                 "energies": [f.get("energy") for f in self.state.log]}
+
+    def _indexed(self, events) -> list:
+        """Copies of ``events`` with ``index``, the sequence frame of the log entry ``frame``:
+        the loop (:func:`.loop.stream_poses`) stamps each entry; ``frame`` counts only the
+        frames tracked forwards, so it differs from ``index`` after frames without a person
+        or a deferred start. With ``init``/``step`` the two are the same."""
+        log = self.state.log
+        out = []
+        for e in events:
+            f = e.get("frame")
+            index = (log[f].get("index", f) if f is not None and 0 <= f < len(log)  # init/step: frames stepped
+                     else e.get("index", f))
+            out.append({**e, "index": index})
+        return out
 
 
 # the whole-sequence entry points, importable from here as before the split into stages
