@@ -32,7 +32,8 @@ class TrackingState:
         Counter: frames that got no pose.
     log : tuple of dict
         Per frame: ``energy``, ``cost`` (unexplained share), ``accepted``, ``recovered``;
-        ``{"absent": True}`` when the track was dropped.
+        ``{"absent": True}`` when the track was dropped. The frame loop adds ``index``, the
+        entry's frame in the sequence (:func:`.loop.stream_poses`).
     init_info : dict
         How the last start went (``mode``, candidates, finalists, ``heading_check``).
     lost : dict or None
