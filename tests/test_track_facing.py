@@ -13,7 +13,7 @@ from depthtrack.io import open_sequence
 from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
 from depthtrack.track.heading import facing_direction
-from depthtrack.track.start import wrong_side
+from depthtrack.track.start import clearly_facing, wrong_side
 from depthtrack.track.tracker import Tracker
 
 
@@ -46,6 +46,17 @@ def test_wrong_side_is_the_half_plane_the_user_did_not_name():
     assert wrong_side(poses, "camera", up).tolist() == [False, True, False]
     assert wrong_side(poses, "away", up).tolist() == [True, False, True]
     assert not wrong_side(poses, "auto", up).any()
+    # within the margin of profile a pose counts as either side (the pelvis's heading is
+    # uncertain there): 80, 110 and 150 degrees from the camera with a 45-degree margin
+    past = facing_camera.copy()
+    past[3:6] = [0.0, np.radians(110), 0.0]
+    far = facing_camera.copy()
+    far[3:6] = [0.0, np.radians(150), 0.0]
+    poses = np.stack([facing_camera, side, past, far, away])
+    assert wrong_side(poses, "camera", up, 45.0).tolist() == [False, False, False, True, True]
+    assert wrong_side(poses, "away", up, 45.0).tolist() == [True, False, False, False, False]
+    assert [clearly_facing(p, "camera", up, 45.0) for p in poses] == [True, False, False, False, False]
+    assert [clearly_facing(p, "away", up, 45.0) for p in poses] == [False, False, False, True, True]
 
 
 def test_facing_away_starts_from_behind_and_skips_the_check(from_behind):
@@ -116,3 +127,30 @@ def test_the_benchmark_reads_the_facing_off_the_truth(from_behind, tmp_path):
     front = tmp_path / "front"
     synthesize_procedural("squat", front, start=0.6, seconds=0.08, seed=3, azimuth=30)
     assert tool.facing_from_truth(front) == "camera"
+    # bent over on frame 0 (the dev split's bend from 120 degrees faces the camera at 30
+    # degrees): the rule reads the pelvis against the floor, not against the trunk's axis
+    bent = tmp_path / "bent"
+    synthesize_procedural("bend", bent, start=0.5, seconds=2.0, seed=1, azimuth=120,
+                          camera="kinect-v2")         # its trunk rule read "away" (dot -0.002)
+    assert tool.facing_from_truth(bent) == "camera"
+
+
+def test_a_twin_the_facing_rules_out_leaves_the_start_as_it_is():
+    """``settle_heading`` with a ``turn`` that returns None (the twin faces the side the
+    user ruled out): the initial track is kept, and ``heading_check`` says why."""
+    from depthtrack.track.heading import settle_heading
+    from depthtrack.track.state import TrackingState
+
+    start = TrackingState(pose=np.zeros(48), log=({},))
+
+    def track(state, depths):         # the turned twin (pose[0] = 1) explains the frames better
+        better = state.pose[0] == 1.0
+        return state, np.zeros((len(depths), 48)), {"unexplained": 0.1 if better else 0.5,
+                                                    "energy": 1.0}
+
+    for turn, kept in ((lambda pose: None, "initial"), (lambda pose: pose + 1.0, "turned")):
+        state, poses = settle_heading(start, [None] * 3, track, turn, TrackerSettings())
+        check = state.init_info["heading_check"]
+        assert check["kept"] == kept and len(poses) == 4
+        assert check["turned_ruled_out"] == (kept == "initial")
+        assert (check["unexplained_turned"] is None) == (kept == "initial")

@@ -326,20 +326,34 @@ def markdown(report: dict) -> str:
 
 def facing_from_truth(path) -> str:
     """``"camera"`` or ``"away"``: which way the person of the sequence at ``path`` faces on
-    frame 0, from its ground-truth joints (their forward direction, flattened across the
-    trunk's axis, against the direction to the camera). Only for the ``--facing-from-truth``
-    ablation: what a user who looked at the recording would tell the tracker."""
+    frame 0, from its ground-truth joints, by the rule of ``--facing``
+    (:func:`depthtrack.track.start.wrong_side`): the pelvis's forward direction and the
+    direction from the pelvis to the camera, both flattened onto the floor. Only for the
+    ``--facing-from-truth`` ablation: what a user who looked at the recording would tell
+    the tracker.
+
+    The floor's normal is the world's up seen by the synthesizer's camera
+    (``synth.placement.world_to_camera`` in ``sequence.json``; the camera's -y without
+    it). Measuring against the trunk's axis instead, as this did at first, reads a person
+    bent over on frame 0 at random (the trunk's axis is then nearly horizontal).
+    """
     import numpy as np
 
     from depthtrack.contract import JOINT_INDEX as J
     from depthtrack.io import open_sequence
 
-    j = np.asarray(open_sequence(path).joints[0], dtype=np.float64)
-    up = j[J["neck"]] - j[J["pelvis"]]
+    seq = open_sequence(path)
+    j = np.asarray(seq.joints[0], dtype=np.float64)
+    placement = (seq.meta.get("synth") or {}).get("placement") or {}
+    if "world_to_camera" in placement:
+        up = -np.asarray(placement["world_to_camera"], dtype=np.float64)[:3, 1]   # world y is down
+    else:
+        up = np.array([0.0, -1.0, 0.0])
     up /= np.linalg.norm(up)
-    across = (j[J["l_hip"]] - j[J["r_hip"]]) + (j[J["l_shoulder"]] - j[J["r_shoulder"]])
-    forward = np.cross(across, up)                 # left x up: the way the chest faces
+    across = j[J["l_hip"]] - j[J["r_hip"]]
+    forward = np.cross(across, up)                 # left x up: the way the pelvis faces
     to_camera = -j[J["pelvis"]]
+    forward -= (forward @ up) * up
     to_camera -= (to_camera @ up) * up
     return "camera" if forward @ to_camera > 0 else "away"
 

@@ -172,8 +172,9 @@ def settle_heading(start, depths, track, turn, settings):
         Tracks a state through the frames (None when the track was dropped); ``scores``
         holds the means over the frames of the unexplained share (``"unexplained"``) and
         of the energy without the motion prior per foreground pixel (``"energy"``).
-    turn : callable ``(pose (48,)) -> (48,)``
-        The turned twin of a pose, fitted to the start frame.
+    turn : callable ``(pose (48,)) -> (48,) or None``
+        The turned twin of a pose, fitted to the start frame; None where the user's facing
+        rules it out (then the initial pose is kept).
     settings : TrackerSettings
         :attr:`HeadingSettings.start_by` names the score that decides, and ``margin`` or
         ``energy_margin`` by how much (a fraction) the twin's must be lower.
@@ -193,7 +194,7 @@ def settle_heading(start, depths, track, turn, settings):
     state_a, track_a, score_a = a
     x_front = start.pose
     x_turned = turn(x_front)
-    b = track(start.replace(pose=x_turned), depths)
+    b = None if x_turned is None else track(start.replace(pose=x_turned), depths)
     score_b = None if b is None else b[2]
     margin = h.margin if h.start_by == "unexplained" else h.energy_margin
     if b is not None and score_b[h.start_by] < (1.0 - margin) * score_a[h.start_by]:
@@ -213,7 +214,7 @@ def settle_heading(start, depths, track, turn, settings):
         "unexplained_turned": rounded(score_b, "unexplained"),
         "energy_initial": rounded(score_a, "energy"),
         "energy_turned": rounded(score_b, "energy"), "kept": choice,
-        "ambiguous": bool(ambiguous)}}
+        "ambiguous": bool(ambiguous), "turned_ruled_out": x_turned is None}}
     return state.replace(init_info=info), poses
 
 

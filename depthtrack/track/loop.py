@@ -39,8 +39,6 @@ def stream_poses(tracker, frames, init_pose=None):
         Start from this pose on frame 0 (ablation: ground-truth initialisation).
     """
     s = tracker.settings
-    # no front/back check where the user said which way the person faces
-    K = s.heading.frames if s.start.facing == "auto" else 0
     source = iter(frames)
     pending = collections.deque()   # frames read ahead and given back
     held = []              # (index, pose) not yet yielded: the track may still drop them
@@ -74,6 +72,9 @@ def stream_poses(tracker, frames, init_pose=None):
                     i += len(early)
                 tracker.state, frame, x = tracker.start(tracker.state, depth, foreground=fg)
                 start_state = tracker.state
+                # no front/back check where the user said which way the person faces, unless
+                # the start is near profile (StartSettings.facing_margin)
+                K = s.heading.frames if tracker.state.init_info.get("facing_clear") is not True else 0
                 ahead = take(K) if K > 0 else []
                 settled = None
                 if K > 0 and len(ahead) == K:

@@ -73,6 +73,11 @@ def floor_up(foreground, points):
     return n if float(np.mean(points @ n) + d) > 0 else -n
 
 
+def start_up(foreground):
+    """:func:`floor_up` of a segmented frame, as the global search reads it."""
+    return floor_up(foreground, robust_points(foreground.points))
+
+
 def facing_penalty(poses, kappa: float, up=None, heading=None):
     """Initial-heading prior ``kappa (1 - cos theta) / 2`` for poses ``(N, 48) -> (N,)``.
 
@@ -103,11 +108,19 @@ def _away_from_camera(poses):
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 
-def wrong_side(poses, facing: str, up) -> np.ndarray:
+#: The other side of each told facing.
+OTHER_SIDE = {"camera": "away", "away": "camera"}
+
+
+def wrong_side(poses, facing: str, up, margin_deg: float = 0.0) -> np.ndarray:
     """``(N,) bool``: which poses ``(N, 48)`` face the other side than the user's ``facing``
-    (:attr:`StartSettings.facing`): their forward direction and the direction from the pelvis
-    to the camera, both flattened onto the floor (normal ``up (3,)``), point into opposite
-    half-planes for ``"camera"``, the same one for ``"away"``; none for ``"auto"``."""
+    (:attr:`StartSettings.facing`); none for ``"auto"``.
+
+    A pose's forward direction and the direction from its pelvis to the camera, both
+    flattened onto the floor (normal ``up (3,)``), make an angle; for ``"camera"`` a pose is
+    on the wrong side beyond ``90 + margin_deg`` degrees, for ``"away"`` below ``90 -
+    margin_deg``. Within ``margin_deg`` of profile a pose counts as either side.
+    """
     poses = np.atleast_2d(poses)
     if facing == "auto":
         return np.zeros(len(poses), dtype=bool)
@@ -116,8 +129,16 @@ def wrong_side(poses, facing: str, up) -> np.ndarray:
     to_camera = -poses[:, 0:3]
     forward = forward - (forward @ up)[:, None] * up
     to_camera = to_camera - (to_camera @ up)[:, None] * up
-    towards = np.sum(forward * to_camera, axis=1) > 0
-    return ~towards if facing == "camera" else towards
+    cosine = np.sum(forward * to_camera, axis=1) / np.maximum(
+        np.linalg.norm(forward, axis=1) * np.linalg.norm(to_camera, axis=1), 1e-12)
+    band = np.sin(np.radians(margin_deg))
+    return cosine < -band if facing == "camera" else cosine > band
+
+
+def clearly_facing(pose, facing: str, up, margin_deg: float) -> bool:
+    """Whether ``pose (48,)`` faces the told side by more than ``margin_deg`` from profile
+    (then its twin turned about the vertical is on the wrong side)."""
+    return bool(wrong_side(pose, OTHER_SIDE[facing], up, margin_deg)[0])
 
 
 def candidate_poses(points, up, centre, render_body, settings):
@@ -207,7 +228,7 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
         """``(N,)``: the heading prior of poses ``x (N, 48)`` plus the user's facing."""
         reference = _away_from_camera(x) if told == "away" else heading
         return (facing_penalty(x, kappa, prior_up, reference)
-                + 2.0 * pixels * wrong_side(x, told, up))
+                + 2.0 * pixels * wrong_side(x, told, up, g.facing_margin))
 
     order = np.argsort(energies + heading_cost(poses))
     shortlist = list(order[:g.shortlist])
@@ -250,4 +271,7 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
             "chosen_orientation": int(i % n_rot) if i < n_grid else None,
             "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
             "finalists": finalists, "facing": told}
+    if told != "auto":
+        # near profile the told side does not settle front and back: the check then runs
+        info["facing_clear"] = clearly_facing(x, told, up, g.facing_margin)
     return x, e, info

@@ -53,7 +53,7 @@ from .record import Recorder
 from .renderers import RendererSet
 from .search import Climbers, climb, polish, predict, search
 from .settings import TrackerSettings
-from .start import global_search
+from .start import global_search, start_up, wrong_side
 from .state import TrackingState, TrackResult
 
 METHODS = ("hc", "ep", "hc+ep")
@@ -356,18 +356,25 @@ class Tracker:
                                       "energy": float(np.mean(energies))}
 
     def turned_start(self, frame):
-        """The turned twin of a pose, climbed on the start ``frame`` (re-uploaded)."""
+        """The turned twin of a pose, climbed on the start ``frame`` (re-uploaded); None
+        where it faces the other side than the user's :attr:`StartSettings.facing` by more
+        than ``facing_margin``."""
+        g = self.settings.start
+
         def turn(pose):
             self.renderers.upload(frame)
             energy = self._energy(frame)
             kind = self.settings.heading.start_twin
             if kind == "search":
                 x, _ = flip_search(self._flip_searcher(energy, frame), pose)
-                return x
-            twins = self._twins(pose) if kind == "swapped" else [turned_pose(pose)]
-            fits = [climb(energy, self.climbers.start, t, self.recorder,
-                          passes=self.settings.start.passes) for t in twins]
-            return min(fits, key=lambda f: float(f[1]))[0]
+            else:
+                twins = self._twins(pose) if kind == "swapped" else [turned_pose(pose)]
+                fits = [climb(energy, self.climbers.start, t, self.recorder, passes=g.passes)
+                        for t in twins]
+                x = min(fits, key=lambda f: float(f[1]))[0]
+            if x is None or wrong_side(x, g.facing, start_up(frame.foreground), g.facing_margin)[0]:
+                return None
+            return x
         return turn
 
     # ------------------------------------------------------------------ the classic interface
