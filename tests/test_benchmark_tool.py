@@ -77,3 +77,15 @@ def test_parity_table_per_condition_and_time_breakdown(tool):
     times = tool.time_breakdown(sequences, ["hc+ep"])["hc+ep"]
     assert times["per_frame_ms"]["render"] == pytest.approx(700.0) and times["tracks"] == 5
     assert tool.time_breakdown([{**s, "timings": None} for s in sequences], ["hc+ep"]) == {}
+
+
+def test_a_motion_keeps_its_condition_when_picked_out(tool, tmp_path):
+    """``--motions`` runs the very sequences of the whole wide preset: a motion's condition
+    follows its place in the split, not in the list picked out (bend, the split's 11th
+    motion, was run from the front when picked out alone, not on Kinect v2 from 120)."""
+    split = tool.split_motions("dev", tmp_path)
+    places = {m[0]: k for k, m in enumerate(split)}
+    whole = {m[0]: tool.motion_conditions(m[0], places, tool.CONDITIONS_QUICK, True) for m in split}
+    assert whole["bend"] == [{"camera": "kinect-v2", "azimuth": 120}]
+    assert tool.motion_conditions("bend", places, tool.CONDITIONS_QUICK, True) == whole["bend"]
+    assert tool.motion_conditions("bend", places, tool.CONDITIONS_PARITY, False) == tool.CONDITIONS_PARITY

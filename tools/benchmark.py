@@ -110,6 +110,13 @@ def quick_subset(motions: list, n: int) -> list:
     return picked + proc[:n - len(picked)]
 
 
+def motion_conditions(name: str, places: dict, conditions: list, one_each: bool) -> list:
+    """The conditions a motion is run under: quick and wide, one, in turn by the motion's
+    place (``places[name]``: its index in the split, or in the quick preset's subset); the
+    full and parity presets, every one."""
+    return [conditions[places[name] % len(conditions)]] if one_each else list(conditions)
+
+
 def busiest_window(kind: str, source: str, seconds: float) -> float:
     """Start (s, after any calibration frames synth drops) of the ``seconds`` in which the joints move most.
 
@@ -406,11 +413,15 @@ def main(argv=None) -> int:
     if missing:
         print(f"benchmark: motion clips not found: {', '.join(missing)}", file=sys.stderr)
         return 2
+    # each motion's place in turn for the one-condition presets: its place in the split, so
+    # that --motions picks out the very sequences of the whole preset
+    places = {m[0]: k for k, m in enumerate(motions)}
     if args.motions:
         wanted = args.motions.split(",")
         motions = [m for m in motions if m[0] in wanted]
     elif preset["clips"]:
         motions = quick_subset(motions, preset["clips"])
+        places = {m[0]: k for k, m in enumerate(motions)}
     conditions = (CONDITIONS_QUICK if one_each else CONDITIONS_PARITY if args.parity
                   else CONDITIONS_FULL)
     out = Path(args.out).resolve() / args.split
@@ -420,11 +431,9 @@ def main(argv=None) -> int:
 
     t0 = time.perf_counter()
     plan = []
-    for i, (name, kind, source) in enumerate(motions):
+    for name, kind, source in motions:
         start = busiest_window(kind, source, seconds)
-        # quick and wide: one condition per motion, in turn; full: every condition
-        conds = [conditions[i % len(conditions)]] if one_each else conditions
-        plan.append((name, kind, source, start, conds))
+        plan.append((name, kind, source, start, motion_conditions(name, places, conditions, one_each)))
     total = sum(len(p[4]) for p in plan) * len(seeds)
 
     def run_group(name, kind, source, start, cond):
