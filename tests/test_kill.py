@@ -38,7 +38,8 @@ def stale_temporary(path: Path, pid: int) -> Path:
 
 def cli(*argv, timeout=300):
     # this checkout first, and whatever else the user's PYTHONPATH holds after it
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
+    path = os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))
+    env = dict(os.environ, PYTHONPATH=path)
     return subprocess.Popen([sys.executable, "-m", "depthtrack", *map(str, argv)], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 

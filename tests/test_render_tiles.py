@@ -106,7 +106,7 @@ def test_cost_is_lowest_at_the_pose_the_observation_was_rendered_from():
 
 
 def assert_depths_agree(a, b):
-    """Two renders of the same poses at other tile positions: all within 1 mm, 99.9 % within 0.1 mm."""
+    """Renders of the same poses at other tile positions: within 1 mm, 99.9 % within 0.1 mm."""
     diff = np.abs(a - b)
     assert diff.max() < 1e-3
     assert np.mean(diff < 1e-4) >= 0.999

@@ -44,7 +44,8 @@ def test_tracker_reproduces_the_reference_joints(tmp_path):
 
     if not software_renderer():
         # recorded on llvmpipe: on an H200 the fitted height came out 1.774 against 1.786 m
-        pytest.skip("the reference was recorded with Mesa's llvmpipe; another rasteriser rounds differently")
+        pytest.skip("the reference was recorded with Mesa's llvmpipe; another rasteriser "
+                    "rounds differently")
     ref = np.load(REFERENCE)
     got, summary_a, summary_b = _track_both(tmp_path)
     assert summary_a["initialisation_details"]["heading_check"]["frames"] == 3

@@ -11,7 +11,7 @@ import numpy as np
 from ..camera import Camera
 from ..errors import InputError
 from .context import gl_context, program
-from .tiles import _set_view, set_draw_state, is_closed_outward, skinned_vertex_buffer
+from .tiles import _set_view, is_closed_outward, set_draw_state, skinned_vertex_buffer
 
 #: Most joints a label image can tell apart (four vec4 varyings of weights).
 MAX_LABEL_JOINTS = 16
@@ -105,7 +105,7 @@ class FrameRenderer:
         if "u_first" in skinned:
             skinned["u_first"].value = 0
         vaos[f"skin_{kind}"].render()
-        set_draw_state(self.ctx, False)      # scenery may be open or wound either way
+        set_draw_state(self.ctx, False)         # scenery may be open or wound either way
         for mesh in extra_meshes:
             vertices, faces = _triangles(mesh)
             if not len(faces):

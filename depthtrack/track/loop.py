@@ -74,7 +74,8 @@ def stream_poses(tracker, frames, init_pose=None):
                 start_state = tracker.state
                 # no front/back check where the user said which way the person faces, unless
                 # the start is near profile (StartSettings.facing_margin)
-                K = s.heading.frames if tracker.state.init_info.get("facing_clear") is not True else 0
+                clear = tracker.state.init_info.get("facing_clear") is True
+                K = 0 if clear else s.heading.frames
                 ahead = take(K) if K > 0 else []
                 settled = None
                 if K > 0 and len(ahead) == K:
@@ -144,11 +145,12 @@ def _track_back(tracker, state, early, first):
     back = tracker.track_through(state, list(reversed(early)))
     if back is None:
         return [(first + k, None) for k in range(len(early))], {}
-    start_log = state.frame - 1                 # the start's log index; backward frame k at start_log + k
+    start_log = state.frame - 1         # the start's log index; frame k back is at start_log + k
     start_index = first + len(early)
 
     def moved(event):
-        index = start_index - (event["frame"] - start_log) if event.get("frame") is not None else None
+        f = event.get("frame")
+        index = None if f is None else start_index - (f - start_log)
         return {**event, "frame": None, "index": index, "backward": True}
     events = {key: tuple(moved(e) for e in getattr(back[0], key)[len(getattr(state, key)):])
               for key in EVENT_LISTS}

@@ -49,13 +49,13 @@ class StartSettings:
         (``"away"``): no pose facing the other side (by more than ``facing_margin`` degrees
         from profile) may start (its forward direction and the direction to the camera,
         flattened onto the floor), and where the start faces the told side (by more than
-        that margin), the check is skipped: a depth image barely tells front from back, and where
-        the two headings explain it within a few percent the automatic decision is a coin
-        flip (dev: overhead on Azure NFOV from 240 degrees, two seeds of three tracked back
-        to front for the whole clip). With a margin, a start within it of profile gets the
-        check, and the turned twin may win only where it is not on the wrong side. It holds at every automatic start (the
-        first frame with a person, and again after the person was gone); a recovery keeps
-        the last tracked heading either way.
+        that margin), the check is skipped: a depth image barely tells front from back, and
+        where the two headings explain it within a few percent the automatic decision is a
+        coin flip (dev: overhead on Azure NFOV from 240 degrees, two seeds of three tracked
+        back to front for the whole clip). With a margin, a start within it of profile gets
+        the check, and the turned twin may win only where it is not on the wrong side. It
+        holds at every automatic start (the first frame with a person, and again after the
+        person was gone); a recovery keeps the last tracked heading either way.
     facing_margin : float
         Degrees either side of profile in which a pose counts as facing either way for
         ``facing`` (default 0: the half-planes). Why one may want it: the pelvis's heading

@@ -462,8 +462,9 @@ class Tracker:
         out = []
         for e in events:
             f = e.get("frame")
-            index = (log[f].get("index", f) if f is not None and 0 <= f < len(log)  # init/step: frames stepped
-                     else e.get("index", f))
+            logged = f is not None and 0 <= f < len(log)
+            # init/step stamp nothing: there the log index is the frames stepped
+            index = log[f].get("index", f) if logged else e.get("index", f)
             out.append({**e, "index": index})
         return out
 
