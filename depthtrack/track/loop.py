@@ -106,8 +106,9 @@ def stream_poses(tracker, frames, init_pose=None):
 
 def _complete_view(tracker, depth, foreground, take, pending):
     """Where an automatic start waits for more of the person (:attr:`StartSettings.
-    complete_fraction`): ``(depth, foreground or None, early)``, the frame to start on and
-    the frames before it, from this one, to be tracked backwards from the start.
+    complete_fraction`): ``(depth, foreground, early)``, the frame to start on (and its
+    segmentation, made here) and the frames before it, from this one, to be tracked
+    backwards from the start.
 
     The next :attr:`StartSettings.complete_frames` frames are read ahead; the start is the
     first of this frame and them whose person covers at least ``complete_fraction`` of the
@@ -117,14 +118,14 @@ def _complete_view(tracker, depth, foreground, take, pending):
     camera = tracker.camera
     ahead = take(g.complete_frames)
     with tracker.recorder.timed("segment"):
-        areas = [visible_area(foreground, camera)] + [
-            visible_area(tracker.segmenter(d, camera), camera) for d in ahead]
+        foregrounds = [foreground] + [tracker.segmenter(d, camera) for d in ahead]
+    areas = [visible_area(f, camera) for f in foregrounds]
     need = g.complete_fraction * max(areas)
     k = next(k for k, a in enumerate(areas) if a >= need)
     pending.extendleft(reversed(ahead[k:]))
     if k == 0:
         return depth, foreground, []
-    return ahead[k - 1], None, [depth, *ahead[:k - 1]]
+    return ahead[k - 1], foregrounds[k], [depth, *ahead[:k - 1]]
 
 
 #: The state's event lists (each entry a dict with the log index ``frame``) that a backward
