@@ -140,3 +140,33 @@ def test_shape_settings_are_validated():
     s = TrackerSettings(shape={"enabled": False, "frames": 8})    # as summary.json holds it
     assert s.shape == dataclasses.replace(ShapeSettings(), enabled=False, frames=8)
     assert TrackerSettings(**{"shape": s.to_dict()["shape"]}).shape == s.shape
+
+
+def test_the_trial_reads_ahead_for_its_front_back_check(shaped_sequence):
+    """The trial tracks ShapeSettings.frames frames, but its start's front/back check needs
+    HeadingSettings.frames more after the start: given the whole sequence it reads them (and
+    no further); given only the trial's frames it has to skip the check."""
+    from depthtrack.track import ShapeSettings, TrackerSettings
+    from depthtrack.track.height import fit_body_shape
+
+    seq, _ = shaped_sequence
+    # no deferred start here: it would read ahead too, to pick the frame to start on
+    settings = TrackerSettings(heading_frames=2, start={"complete_fraction": 0.0},
+                               shape=ShapeSettings(frames=2, fit_frames=2, rounds=1,
+                                                   max_iterations=1, prior_weight=1.0))
+    read = []
+
+    def frames(n):
+        for i in range(n):
+            read.append(i)
+            yield seq.depth(i)
+
+    _, info = fit_body_shape(frames(len(seq)), BodyModel.default(1.75), seq.camera, fps=seq.fps,
+                             settings=settings, fit_scale=False, method="hc")
+    assert info["frames_tracked"] == 2 and info["fitted"]
+    assert info["start_info"]["heading_check"]["frames"] == 2
+    assert read == [0, 1, 2]              # the start frame and the check's two, no more
+    read.clear()
+    _, short = fit_body_shape(frames(2), BodyModel.default(1.75), seq.camera, fps=seq.fps,
+                              settings=settings, fit_scale=False, method="hc")
+    assert "heading_check" not in short["start_info"]

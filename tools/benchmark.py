@@ -280,6 +280,8 @@ def markdown(report: dict) -> str:
            *(["**ABLATION: the tracker was told which way each person faces at the start "
               "(`--facing`, read off the ground truth of frame 0).**", ""]
              if report.get("facing_from_truth") else []),
+           *([f"**Not the default tracker: `--settings {report['tracker_settings']}`.**", ""]
+             if report.get("tracker_settings") else []),
            "## Overall (each motion-condition group weighs the same; ± = spread over seeds)", "",
            "| method | within 10 cm | mean error (cm) | max error (cm) | marker avg (cm) | fps (mean) | "
            "worst group within 10 cm | slowest sequence fps |",
@@ -390,6 +392,10 @@ def main(argv=None) -> int:
                         help="ABLATION: tell the tracker which way the person faces at the start "
                              "(depthtrack eval --facing, read off the ground truth of frame 0), as "
                              "a user who looked at the recording would; the report says so")
+    parser.add_argument("--settings", metavar="JSON", default=None,
+                        help="tracker settings for every sequence (depthtrack eval --settings: "
+                             "a JSON object or file), to measure a setting on dev; the report "
+                             "keeps them and says the tracker was not the default")
     parser.add_argument("--keep-tracks", action="store_true",
                         help="also keep every track (OUT/SPLIT/tracks/SEQUENCE/METHOD/), to look at the failures")
     args = parser.parse_args(argv)
@@ -451,6 +457,8 @@ def main(argv=None) -> int:
         facing = facing_from_truth(group[0][1]) if args.facing_from_truth else None
         if facing is not None:
             evaluate += ["--facing", facing]
+        if args.settings is not None:
+            evaluate += ["--settings", args.settings]
         if args.keep_tracks:
             evaluate += ["--tracks-out", shown(out / "tracks"), "--force"]
         result = json.loads(run_depthtrack(evaluate))["sequences"]
@@ -491,6 +499,7 @@ def main(argv=None) -> int:
         "machine": f"{os.cpu_count()} CPUs", "commit": commit, "seconds": seconds, "fps": FPS,
         "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0, "jobs": args.jobs,
         "facing_from_truth": bool(args.facing_from_truth),
+        "tracker_settings": args.settings,
         "motions": [{"name": n, "kind": k, "source": s, "start_s": st} for n, k, s, st, _ in plan],
         "conditions": conditions, "sequences": sequences, "groups": groups, "overall": overall,
         "by_condition": by_condition(sequences, methods),

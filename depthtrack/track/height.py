@@ -8,6 +8,7 @@ its own (:func:`~.shape_fit.fit_shape`); both are released before it returns.
 """
 from __future__ import annotations
 
+import itertools
 import time
 
 import numpy as np
@@ -152,8 +153,13 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
 
     Parameters
     ----------
-    frames : sequence of (H, W) float
-        The first frames (:attr:`ShapeSettings.frames` of them).
+    frames : iterable of (H, W) float
+        The sequence's frames from the first (or at least its first
+        :attr:`ShapeSettings.frames`). The trial tracks the first ``ShapeSettings.frames``;
+        the frames after them are read only where the start looks ahead past them (a
+        deferred start, the front/back check's :attr:`HeadingSettings.frames`), so that the
+        trial starts as the track would: with only the first frames, a start late in them
+        had no frames left for its front/back check and skipped it.
     body : BodyModel
         The template at the subject's height (given or fitted).
     camera : Camera
@@ -182,14 +188,26 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     if segmenter is None:
         from ..detect import segment_foreground as segmenter
     t0 = time.perf_counter()
-    depths = [np.asarray(d, dtype=np.float32) for d in frames]
+    depths = []                       # every frame read, the look-ahead's included
+
+    def read():
+        for d in frames:
+            depths.append(np.asarray(d, dtype=np.float32))
+            yield depths[-1]
+
     with Tracker(body, camera, method=method, fps=fps, settings=settings,
                  segmenter=segmenter) as tracker:
-        tracked = [(i, x) for i, x in tracker.stream(depths) if x is not None]
+        stream = tracker.stream(read())
+        try:
+            # the first s.frames frames, in order (the stream yields every index once)
+            trial = list(itertools.islice(stream, s.frames))
+        finally:
+            stream.close()
+        tracked = [(i, x) for i, x in trial if x is not None]
         start = dict(tracker.state.init_info)
-    info = {"fitted": False, "frames_tracked": len(depths)}
+    info = {"fitted": False, "frames_tracked": len(trial)}
     if len(tracked) < s.fit_frames:
-        info.update(reason=f"{len(tracked)} of the first {len(depths)} frames got a pose; "
+        info.update(reason=f"{len(tracked)} of the first {len(trial)} frames got a pose; "
                            f"the fit needs {s.fit_frames}",
                     seconds=round(time.perf_counter() - t0, 2))
         return body, info

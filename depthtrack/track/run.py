@@ -100,8 +100,10 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
     elif settings.shape.enabled:
         # the trial starts as the track would (with the part recogniser unless "hc"); "ep"
         # alone drifts, so its trial climbs too
-        body, shape_info = fit_body_shape((seq.depth(i) for i in range(n)), body, seq.camera,
-                                          fps=seq.fps, settings=settings, segmenter=segmenter,
+        # the whole sequence on offer: the trial's start may look ahead past its n frames
+        frames = (seq.depth(i) for i in range(len(seq)))
+        body, shape_info = fit_body_shape(frames, body, seq.camera, fps=seq.fps,
+                                          settings=settings, segmenter=segmenter,
                                           fit_scale=not seq.subject_height,
                                           method="hc" if method == "hc" else "hc+ep")
     start_pose = shape_info.pop("start_pose", None)
