@@ -117,3 +117,20 @@ def test_renderers_release_on_leaving_with():
             tiles.set_body(BodyModel.default(1.6))                  # another mesh
     assert _live_gl_objects() == start
     tiles.release()                 # idempotent
+
+
+def test_the_front_back_check_makes_do_with_the_frames_there_are(frames):
+    """A clip shorter than HeadingSettings.frames after the start is checked on the frames
+    it has, when they are at least min_frames; with fewer the check is skipped."""
+    from depthtrack.track import TrackerSettings
+    from depthtrack.track.tracker import Tracker
+
+    body, _, depths = frames
+    for min_frames, checked in ((2, 3), (10, None)):
+        settings = TrackerSettings(heading={"frames": 25, "min_frames": min_frames},
+                                   start={"complete_fraction": 0.0})
+        with Tracker(body, CAMERA, method="hc", segmenter=_segment, settings=settings) as t:
+            out = list(t.stream(depths))
+            check = t.state.init_info.get("heading_check")
+        assert [i for i, x in out if x is not None] == [0, 1, 2, 3]
+        assert (check and check["frames"]) == checked

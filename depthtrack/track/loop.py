@@ -78,13 +78,13 @@ def stream_poses(tracker, frames, init_pose=None):
                 K = 0 if clear else s.heading.frames
                 ahead = take(K) if K > 0 else []
                 settled = None
-                if K > 0 and len(ahead) == K:
+                if K > 0 and len(ahead) >= min(K, s.heading.min_frames):
                     settled = settle_heading(tracker.state, ahead, tracker.track_through,
                                              tracker.turned_start(frame), s)
                 if settled is not None:
                     tracker.state, poses = settled
                     started = [(i + k, p) for k, p in enumerate(poses)]
-                    i += K
+                    i += len(ahead)
                 else:                       # no check: the frames read ahead come next
                     started = [(i, x)]
                     pending.extendleft(reversed(ahead))

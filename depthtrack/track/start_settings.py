@@ -155,6 +155,10 @@ class HeadingSettings:
     ``recheck_margin``; a frontal view, where the twins explain the image equally well,
     gives leads of either sign that the drift cancels.
 
+    Where fewer than ``frames`` frames follow the start, the check runs on those there are
+    when they are at least ``min_frames`` (else it is skipped), so a longer look does not
+    leave short clips unchecked.
+
     ``start_twin``: the start check's other hypothesis (:data:`START_TWINS`), by default the
     swapped twin, as the recheck's: a twin turned with its limbs competes with a different
     fit of the limbs, not only with the other heading, and on dev clips seen from the front
@@ -185,6 +189,7 @@ class HeadingSettings:
     """
 
     frames: int = 10
+    min_frames: int = 10
     margin: float = 0.1
     start_by: str = "unexplained"
     energy_margin: float = 0.0
@@ -207,7 +212,7 @@ class HeadingSettings:
                                               f"{', '.join(START_SCORES)}, not {self.start_by!r}")
         _check(self.start_twin in START_TWINS, f"HeadingSettings.start_twin must be one of "
                                                f"{', '.join(START_TWINS)}, not {self.start_twin!r}")
-        _positive(self, "frames", "margin", "every", "recheck_margin", "evidence_drift",
+        _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin", "evidence_drift",
                   "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", allow_zero=True)
         _positive(self, "votes", "twin_passes")
