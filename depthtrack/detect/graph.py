@@ -112,12 +112,15 @@ def surface_components(depth, valid, fx: float, base: float = 0.08, pixels: floa
     n = valid.size
     a, b = _edges(valid, depth, fx, base, pixels)
     graph = sparse.coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(n, n)).tocsr()
-    _, flat = csgraph.connected_components(graph, directed=False)
+    count, flat = csgraph.connected_components(graph, directed=False)
     labels = np.full(n, -1)
     keep = valid.ravel()
-    # renumber the components of valid pixels 0..count-1 (invalid pixels are singletons)
-    uniq, labels[keep] = np.unique(flat[keep], return_inverse=True)
-    return labels.reshape(valid.shape), len(uniq)
+    # renumber the components of valid pixels 0..count-1 in the order of their ids (invalid
+    # pixels are singletons): np.unique's numbering, without its sort of every pixel
+    present = np.zeros(count, dtype=bool)
+    present[flat[keep]] = True
+    labels[keep] = (np.cumsum(present) - 1)[flat[keep]]
+    return labels.reshape(valid.shape), int(present.sum())
 
 
 def surface_graph(points_image, valid, fx: float, base: float = 0.08, pixels: float = 6.0):
