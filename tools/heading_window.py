@@ -55,6 +55,10 @@ def main(argv=None) -> int:
     parser.add_argument("sequence")
     parser.add_argument("--frames", type=int, default=49, help="frames after the start (default 49)")
     args = parser.parse_args(argv)
+    if open_sequence(args.sequence).joints is None:
+        print(f"heading_window: {args.sequence}: no ground truth (groundtruth/joints.csv)",
+              file=sys.stderr)
+        return 2
     h = hypotheses(args.sequence, args.frames)
     n = min(len(h["initial"][0]), len(h["turned"][0]))
     for a, b in [(a, min(a + 10, n)) for a in range(0, n, 10)] + [(0, n)]:
