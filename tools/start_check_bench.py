@@ -37,6 +37,23 @@ RULES = {"unexplained, margin 0.10": ("unexplained", 0.10),
          "energy, margin 0": ("energy", 0.0)}
 
 
+def start_both_ways(tracker, seq, follow: int):
+    """The automatic start on the first frame of ``seq`` with a person and at least
+    ``follow`` frames after it, as the tracker's loop makes it (without the wait for the
+    whole person): ``(frame index, start state, {"initial": pose (48,), "turned": pose (48,)
+    or None})``, the start pose and its turned twin (:meth:`Tracker.turned_start`); None
+    when no such frame has a person."""
+    for i in range(len(seq) - follow):
+        depth = seq.depth(i)
+        fg = tracker.segmenter(depth, tracker.camera)
+        if tracker.person_present(fg):
+            break
+    else:
+        return None
+    state, frame, _ = tracker.start(tracker.state, depth, foreground=fg)
+    return i, state, {"initial": state.pose, "turned": tracker.turned_start(frame)(state.pose)}
+
+
 def start_hypotheses(path, method: str = "hc+ep") -> dict | None:
     """Both hypotheses of the start check on one sequence: ``{"name", "frame", "initial",
     "turned"}``, each hypothesis ``{"unexplained", "energy", "within_10cm"}`` (None when
@@ -46,18 +63,13 @@ def start_hypotheses(path, method: str = "hc+ep") -> dict | None:
     settings = TrackerSettings(shape={"enabled": False})
     K = settings.heading.frames
     with Tracker(body, seq.camera, fps=seq.fps, settings=settings, method=method) as t:
-        for i in range(len(seq) - K):
-            depth = seq.depth(i)
-            fg = t.segmenter(depth, t.camera)
-            if t.person_present(fg):
-                break
-        else:
+        started = start_both_ways(t, seq, K)
+        if started is None:
             return None
-        state, frame, _ = t.start(t.state, depth, foreground=fg)
+        i, state, starts = started
         ahead = [seq.depth(i + 1 + k) for k in range(K)]
         truth = seq.joints[i + 1:i + 1 + K]
         out = {"name": pathlib.Path(path).name, "frame": i}
-        starts = {"initial": state.pose, "turned": t.turned_start(frame)(state.pose)}
         for kind, pose in starts.items():
             got = t.track_through(state.replace(pose=pose), ahead)
             if got is None:

@@ -212,8 +212,8 @@ class HeadingSettings:
                                               f"{', '.join(START_SCORES)}, not {self.start_by!r}")
         _check(self.start_twin in START_TWINS, f"HeadingSettings.start_twin must be one of "
                                                f"{', '.join(START_TWINS)}, not {self.start_twin!r}")
-        _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin", "evidence_drift",
-                  "evidence_threshold", "search_every", "search_margin", "energy_margin",
+        _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
+                  "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", allow_zero=True)
         _positive(self, "votes", "twin_passes")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
