@@ -15,7 +15,7 @@ from depthtrack.io.track_output import write_track
 from depthtrack.body.markers import MARKER_NAMES, marker_positions
 
 FRAMES = 5
-METRIC_KEYS = {"frames", "fps", "mean_error_m", "max_error_m", "within_10cm",
+METRIC_KEYS = {"frames", "fps", "wall_fps", "mean_error_m", "max_error_m", "within_10cm",
                "marker_mean_error_m", "marker_max_error_m", "silhouette_iou", "unexplained_fraction",
                "median_depth_residual_m", "segment_length_error_m"}
 
@@ -38,7 +38,7 @@ def data(tmp_path_factory):
     seq = write_sequence(root / "walkseq", depth, camera, 25.0, joints=truth, markers=markers,
                          marker_names=MARKER_NAMES, subject=1.7)
     exact = write_track(root / "track_hc", joints, poses, body.pose_names, body, 25.0,
-                        {"method": "hc", "seconds": 2.0})
+                        {"method": "hc", "seconds": 2.0, "wall_seconds": 4.0})
     shifted_poses = poses.copy()
     shifted_poses[:, 0] += 0.05
     shifted = write_track(root / "track_hcep", body.joint_positions(shifted_poses), shifted_poses,
@@ -64,6 +64,7 @@ def test_json_shape_and_zero_error_for_ground_truth_track(data, capsys):
     assert set(m) == METRIC_KEYS
     assert m["frames"] == FRAMES
     assert m["fps"] == pytest.approx(FRAMES / 2.0)
+    assert m["wall_fps"] == pytest.approx(FRAMES / 4.0)      # the body fits' time too
     assert m["mean_error_m"] < 1e-5 and m["max_error_m"] < 1e-5   # CSV keeps 1 um
     assert m["within_10cm"] == 1.0
     assert m["marker_mean_error_m"] < 1e-5 and m["marker_max_error_m"] < 1e-5

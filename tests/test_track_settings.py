@@ -52,3 +52,34 @@ def test_the_summary_settings_build_the_same_settings_again():
     s = TrackerSettings(heading_frames=4, search=SearchSettings(passes=3))
     again = TrackerSettings(**json.loads(json.dumps(s.to_dict())))
     assert again == s
+
+
+def test_a_preset_is_the_defaults_with_its_groups_changed():
+    from depthtrack.track.settings import PRESETS, preset
+
+    assert preset("default") == TrackerSettings()
+    fast = preset("fast")
+    assert fast.shape.enabled is False and fast.search.passes == 1 and fast.polish.fine_tile == 0
+    assert fast.heading.every == 8 and fast.heading.limb_every == 8 and fast.propose.reach_every == 4
+    # everything the preset does not name stays at its default
+    assert fast.heading.frames == HeadingSettings().frames and fast.search.levels == SearchSettings().levels
+    assert set(PRESETS) == {"default", "fast"}
+    with pytest.raises(InputError, match="unknown preset"):
+        preset("fastest")
+
+
+def test_settings_laid_over_a_preset_change_only_the_fields_they_name():
+    from types import SimpleNamespace
+
+    from depthtrack.cli.track import tracker_settings
+
+    s = tracker_settings(SimpleNamespace(preset="fast", settings='{"heading": {"every": 4}}'))
+    assert s.heading.every == 4 and s.heading.limb_every == 8 and s.shape.enabled is False
+    # without a preset, --settings builds on the defaults, as it always did
+    plain = tracker_settings(SimpleNamespace(settings='{"heading": {"every": 4}}'))
+    assert plain == TrackerSettings(heading=HeadingSettings(every=4))
+    # a whole summary.json's settings rebuild that track's settings, whatever the preset
+    summary = json.dumps({"settings": tracker_settings(SimpleNamespace(preset="fast")).to_dict()})
+    assert tracker_settings(SimpleNamespace(settings=summary)) == tracker_settings(SimpleNamespace(preset="fast"))
+    # --shape-fit still has the last word
+    assert tracker_settings(SimpleNamespace(preset="fast", shape_fit="on")).shape.enabled is True

@@ -77,6 +77,9 @@ def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, t
     assert trial["mode"] == "automatic" and "start_info" not in fit
     assert trial["candidates"] > 0 and len(trial["finalists"]) >= 1
     json.dumps(summary)                                          # summary.json can hold it
+    # the wall time counts the shape fit too; seconds (and fps) the tracking pass alone
+    assert summary["wall_seconds"] >= summary["seconds"] + fit["seconds"] - 0.01
+    assert summary["wall_fps"] == pytest.approx(len(seq) / summary["wall_seconds"], rel=1e-2)
     assert "trial track's frame-0 pose" in summary["initialisation"]
     assert summary["settings"]["shape"]["frames"] == 5
     assert summary["body_height_m"] == pytest.approx(1.75)      # given: not rescaled

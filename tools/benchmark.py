@@ -50,6 +50,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from depthtrack.io.atomic import write_text_atomic  # noqa: E402
+from depthtrack.track.settings import PRESETS as TRACKER_PRESETS  # noqa: E402
 
 SPLIT_FILE = REPO / "depthtrack" / "data" / "motion_split.json"
 FPS = 25.0
@@ -86,7 +87,7 @@ PRESETS = {
     "quick": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep", "clips": 3},
     "wide": {"seconds": 2.0, "seeds": 3, "methods": "hc+ep", "clips": None},
 }
-METRICS = ("within_10cm", "mean_error_m", "max_error_m", "marker_mean_error_m", "fps")
+METRICS = ("within_10cm", "mean_error_m", "max_error_m", "marker_mean_error_m", "fps", "wall_fps")
 
 
 def split_motions(split: str, data: Path) -> list:
@@ -257,8 +258,18 @@ def aggregate(sequences: list, methods: list) -> tuple:
         group_means = [r["methods"][m]["within_10cm"]["mean"] for r in rows]
         stats["worst_group_within_10cm"] = min(group_means)
         stats["fps_min"] = min(r["methods"][m]["fps_min"] for r in rows)
+        walls = [s["metrics"][m].get("wall_fps") for s in sequences]
+        stats["wall_fps_min"] = min(walls) if walls and None not in walls else None
         overall[m] = stats
     return rows, overall
+
+
+def _wall(o):
+    """``wall_fps`` (mean and slowest) of an overall row; "-" for reports made before it."""
+    s = o.get("wall_fps") or {}
+    if s.get("mean") is None or o.get("wall_fps_min") is None:
+        return "-"
+    return f"{s['mean']:.2f}, {o['wall_fps_min']:.2f}"
 
 
 def _pct(s):
@@ -282,15 +293,17 @@ def markdown(report: dict) -> str:
              if report.get("facing_from_truth") else []),
            *([f"**Not the default tracker: `--settings {report['tracker_settings']}`.**", ""]
              if report.get("tracker_settings") else []),
+           *([f"**Not the default tracker: `--preset {report['tracker_preset']}`.**", ""]
+             if report.get("tracker_preset", "default") != "default" else []),
            "## Overall (each motion-condition group weighs the same; ± = spread over seeds)", "",
            "| method | within 10 cm | mean error (cm) | max error (cm) | marker avg (cm) | fps (mean) | "
-           "worst group within 10 cm | slowest sequence fps |",
-           "|---|---:|---:|---:|---:|---:|---:|---:|"]
+           "worst group within 10 cm | slowest sequence fps | fps with the body fits (mean, slowest) |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for m in methods:
         o = report["overall"][m]
         out.append(f"| {m} | {_pct(o['within_10cm'])} | {_cm(o['mean_error_m'])} | {_cm(o['max_error_m'])} | "
                    f"{_cm(o['marker_mean_error_m'])} | {o['fps']['mean']:.2f} | "
-                   f"{100 * o['worst_group_within_10cm']:.0f}% | {o['fps_min']:.2f} |")
+                   f"{100 * o['worst_group_within_10cm']:.0f}% | {o['fps_min']:.2f} | {_wall(o)} |")
     if report.get("by_condition") and len(report["by_condition"]) > 1:
         out += ["", "## Per condition (mean over the motions; ± = spread over seeds)", "",
                 "| condition | " + " | ".join(f"{m} within 10 cm" for m in methods) + " |",
@@ -396,6 +409,9 @@ def main(argv=None) -> int:
                         help="tracker settings for every sequence (depthtrack eval --settings: "
                              "a JSON object or file), to measure a setting on dev; the report "
                              "keeps them and says the tracker was not the default")
+    parser.add_argument("--tracker-preset", choices=tuple(TRACKER_PRESETS), default=None,
+                        help="tracker preset for every sequence (depthtrack eval --preset: default, "
+                             "fast); the report keeps it and, for any but default, says so")
     parser.add_argument("--keep-tracks", action="store_true",
                         help="also keep every track (OUT/SPLIT/tracks/SEQUENCE/METHOD/), to look at the failures")
     args = parser.parse_args(argv)
@@ -459,6 +475,8 @@ def main(argv=None) -> int:
             evaluate += ["--facing", facing]
         if args.settings is not None:
             evaluate += ["--settings", args.settings]
+        if args.tracker_preset is not None:
+            evaluate += ["--preset", args.tracker_preset]
         if args.keep_tracks:
             evaluate += ["--tracks-out", shown(out / "tracks"), "--force"]
         result = json.loads(run_depthtrack(evaluate))["sequences"]
@@ -485,7 +503,8 @@ def main(argv=None) -> int:
                 done += 1
                 print(f"[{done}/{total}] {r['name']}: " + ", ".join(
                     f"{m} {100 * r['metrics'][m]['within_10cm']:.0f}% within 10 cm, "
-                    f"{r['metrics'][m]['fps']:.2f} fps" for m in methods), file=sys.stderr, flush=True)
+                    f"{r['metrics'][m]['fps']:.2f} fps ({r['metrics'][m].get('wall_fps') or 0:.2f} with the body fits)"
+                    for m in methods), file=sys.stderr, flush=True)
     sequences = [r for k in sorted(results) for r in results[k]]
     groups, overall = aggregate(sequences, methods)
     try:
@@ -500,6 +519,7 @@ def main(argv=None) -> int:
         "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0, "jobs": args.jobs,
         "facing_from_truth": bool(args.facing_from_truth),
         "tracker_settings": args.settings,
+        "tracker_preset": args.tracker_preset or "default",
         "motions": [{"name": n, "kind": k, "source": s, "start_s": st} for n, k, s, st, _ in plan],
         "conditions": conditions, "sequences": sequences, "groups": groups, "overall": overall,
         "by_condition": by_condition(sequences, methods),

@@ -9,6 +9,7 @@ from pathlib import Path
 from ..errors import InputError
 from .reader_options import add_reader_options, reader_options
 from .args import add_force, check_output
+from .track import add_preset_option
 
 
 _EPILOG = """examples:
@@ -77,6 +78,7 @@ def register(subparsers) -> None:
                         "know (see depthtrack track --help)")
     p.add_argument("--settings", metavar="JSON", default=None,
                    help="tracker settings for every sequence, as for depthtrack track")
+    add_preset_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_reader_options(p)
     add_force(p, "the --report directory")
@@ -98,9 +100,9 @@ def run(args) -> int:
         raise InputError(args.tracks_out, "exists and is not a directory")
     executor = "dask" if args.dask else ("workers" if args.workers else "serial")
     settings = None
-    if args.settings is not None or args.facing is not None:
+    if args.settings is not None or args.facing is not None or args.preset is not None:
         if args.track is not None:
-            raise InputError(None, "--settings and --facing apply to tracking, not to --track")
+            raise InputError(None, "--settings, --preset and --facing apply to tracking, not to --track")
         from .track import tracker_settings
         settings = tracker_settings(args)
     evaluation = evaluate(args.sequences, methods=methods, likelihood=args.likelihood,

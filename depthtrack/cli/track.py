@@ -21,6 +21,7 @@ examples:
   depthtrack track seq_walk -o track_walk --method hc --likelihood pixel --overlay walk.mp4
   depthtrack track seq_walk -o track_walk --shape-fit off      # keep the template's proportions
   depthtrack track seq_walk -o track_walk --settings '{"heading": {"every": 8}}'
+  depthtrack track seq_walk -o track_walk --preset fast   # about twice the speed, a few points less accurate
   depthtrack track seq_walk -o track_walk --facing away   # the person starts with their back to us
   depthtrack track recording.mkv -o track_kinect
   depthtrack track realsense.bag -o track_rs --topic /device_0/sensor_0/Depth_0/image/data
@@ -76,6 +77,7 @@ def register(subparsers) -> None:
                    help="tracker settings, a file or JSON text: an object of setting groups as summary.json's "
                         "\"settings\" holds them (only the fields to change, e.g. "
                         "{\"heading\": {\"every\": 8}}), or a track's summary.json itself")
+    add_preset_option(p)
     from .export import add_export_options
     add_export_options(p, "--export", "also write these formats into OUT/exports/: glb, gltf, c3d, json, "
                                       "bvh, csv (comma-separated; see `depthtrack export`)")
@@ -106,15 +108,26 @@ def _add_overlay(out, overlay, seq, poses, body, summary) -> None:
     write_text_atomic(out / "summary.json", summary_json_text(written_summary))
 
 
+def add_preset_option(p) -> None:
+    """``--preset``: the named starting point of the tracker settings (track and eval)."""
+    from ..track.settings import PRESETS
+
+    p.add_argument("--preset", choices=tuple(PRESETS), default=None,
+                   help="tracker settings to start from: default (the most accurate) or fast "
+                        "(about twice the frames per second for a few points of accuracy: no "
+                        "shape fit, one search pass, no polish, rechecks half as often; README, "
+                        "\"Speed\"); --settings, --shape-fit and --facing then change it")
+
+
 def tracker_settings(args):
-    """The tracker settings the options ask for (``--settings``, then ``--shape-fit`` and
-    ``--facing``)."""
+    """The tracker settings the options ask for (``--preset``, then ``--settings`` over it,
+    then ``--shape-fit`` and ``--facing``)."""
     import dataclasses
 
     from ..body.shape import read_json_source
-    from ..track.settings import TrackerSettings
+    from ..track.settings import preset
 
-    s = TrackerSettings()
+    s = preset(getattr(args, "preset", None) or "default")
     given = getattr(args, "settings", None)
     if given is not None:
         data, path = read_json_source(given, "tracker settings")
@@ -123,7 +136,7 @@ def tracker_settings(args):
         if not isinstance(data, dict):
             raise InputError(path, "tracker settings must be a JSON object of setting groups")
         try:
-            s = TrackerSettings(**data)         # groups, and the flat names summary.json keeps
+            s = s.updated(data)         # groups (fields named), and the flat names summary.json keeps
         except InputError as exc:
             raise InputError(path, exc.problem) from None
     if getattr(args, "shape_fit", None) is not None:

@@ -118,7 +118,7 @@ def evaluate_sequence(task: SequenceTask) -> list:
             joints, poses, body, seconds, summary = runs.track_sequence(
                 seq, method, task.likelihood, not task.progress, settings=task.settings)
             result = runs.score(task.name, method, seq, joints, poses, body, seconds,
-                                masks=masks)
+                                masks=masks, wall_seconds=runs.summary_wall_seconds(summary))
             result.track_summary = dict(summary)
             if task.tracks_dir is not None:
                 from ..io.track_output import write_track

@@ -165,7 +165,7 @@ def frames_per_second(frames: int, seconds) -> float:
 
 
 def summarize(joint_err, frames: int, seconds=None, marker_err=None,
-              threshold: float = WITHIN_THRESHOLD_M, fit=None, shape=None) -> dict:
+              threshold: float = WITHIN_THRESHOLD_M, fit=None, shape=None, wall_seconds=None) -> dict:
     """The summary figures of one track of one sequence.
 
     Parameters
@@ -176,6 +176,8 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
         Frames tracked.
     seconds : float or None
         Tracking time, for the rate.
+    wall_seconds : float or None
+        The whole tracking work (the body height and shape fits too), for ``wall_fps``.
     marker_err : (F, M) float or None
         From :func:`marker_errors`; ``None`` when the sequence has no markers.
     fit : dict or None
@@ -185,7 +187,7 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
 
     Returns
     -------
-    dict with ``frames, fps, mean_error_m, max_error_m, within_10cm,
+    dict with ``frames, fps, wall_fps, mean_error_m, max_error_m, within_10cm,
     marker_mean_error_m, marker_max_error_m, silhouette_iou, unexplained_fraction,
     median_depth_residual_m, segment_length_error_m`` (:data:`METRIC_KEYS`) and, with
     ``shape``, ``segment_length_errors_m`` {segment: metres}; unknown values are ``None``.
@@ -196,6 +198,7 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
     return {
         "frames": int(frames),
         "fps": finite_or_none(frames_per_second(frames, seconds)),
+        "wall_fps": finite_or_none(frames_per_second(frames, wall_seconds)),
         "mean_error_m": finite_or_none(mean_error(joint_err)),
         "max_error_m": finite_or_none(mean_max_error(joint_err)),
         "within_10cm": finite_or_none(fraction_within(joint_err, threshold)),
@@ -208,7 +211,7 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
 
 
 #: Keys of :func:`summarize`'s result, in report order.
-METRIC_KEYS = ("frames", "fps", "mean_error_m", "max_error_m", "within_10cm",
+METRIC_KEYS = ("frames", "fps", "wall_fps", "mean_error_m", "max_error_m", "within_10cm",
                "marker_mean_error_m", "marker_max_error_m", *FIT_KEYS, "segment_length_error_m")
 
 

@@ -220,8 +220,18 @@ def summary_seconds(summary: dict, frames: int):
     return None
 
 
+def summary_wall_seconds(summary: dict):
+    """The whole tracking work from a track's summary.json (``wall_seconds``: the body
+    height and shape fits too); None in summaries written before it existed."""
+    seconds = summary.get("wall_seconds")
+    if isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0:
+        return float(seconds)
+    return None
+
+
 # ------------------------------------------------------------------ scoring
-def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=None) -> MethodResult:
+def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=None,
+          wall_seconds=None) -> MethodResult:
     """Score one track of one sequence.
 
     Parameters
@@ -236,6 +246,8 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=
     body : BodyModel or None
     seconds : float or None
         Tracking time.
+    wall_seconds : float or None
+        The whole tracking work, body fits included (``summary.json``'s ``wall_seconds``).
     masks : list of (H, W) bool or None
         The person's foreground per frame (:func:`depthtrack.evaluate.fit.person_masks`),
         for the fit figures; computed when None and ``poses`` and ``body`` are given.
@@ -259,7 +271,7 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=
     if poses is not None and body is not None:
         per_frame = fit_figures.track_fit(seq, poses, body, masks)
     shape = fit_figures.shape_errors(body, fit_figures.shape_truth(seq))
-    summary = metrics.summarize(joint_err, F, seconds, marker_err,
+    summary = metrics.summarize(joint_err, F, seconds, marker_err, wall_seconds=wall_seconds,
                                 fit=None if per_frame is None else fit_figures.summarize_fit(per_frame),
                                 shape=shape if shape["segment_length_errors_m"] else None)
     return MethodResult(name, method, joints, joint_err, marker_err, names, seconds, summary, poses, body,
@@ -391,7 +403,8 @@ def evaluate(sequence_paths, methods=METHODS, likelihood: str = "smoothed", trac
             body = body_for_track_dir(track_dir, track) if track.poses.shape[1] == 48 else None
             result = score(name, method, seq, track.joints, track.poses, body,
                            summary_seconds(track.summary, len(track.poses)),
-                           masks=masks_of(seq) if body is not None else None)
+                           masks=masks_of(seq) if body is not None else None,
+                           wall_seconds=summary_wall_seconds(track.summary))
             result.track_summary = dict(track.summary)
             log(_line(result))
             results.append(result)
@@ -431,5 +444,5 @@ def print_line(line: str) -> None:
 
 
 __all__ = ["METHODS", "LIKELIHOODS", "MethodResult", "Evaluation", "sequence_name",
-           "open_with_ground_truth", "check_methods", "body_for_track", "body_for_track_dir", "summary_seconds", "score",
+           "open_with_ground_truth", "check_methods", "body_for_track", "body_for_track_dir", "summary_seconds", "summary_wall_seconds", "score",
            "track_sequence", "evaluate"]

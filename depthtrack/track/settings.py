@@ -355,6 +355,21 @@ class TrackerSettings:
         out = TrackerSettings(**current)
         return TrackerSettings(**{name: getattr(out, name) for name in GROUPS}, **flat) if flat else out
 
+    def updated(self, data: dict) -> "TrackerSettings":
+        """A copy with ``data`` laid over it: each group given as a dict changes only the
+        fields it names (``{"heading": {"every": 8}}`` keeps the rest of this ``heading``),
+        a group object or a flat name replaces as in :meth:`replace`. What ``--settings``
+        does on top of a ``--preset``."""
+        changes = {}
+        for key, value in data.items():
+            if key in GROUPS and isinstance(value, dict):
+                try:
+                    value = dataclasses.replace(getattr(self, key), **value)
+                except TypeError as exc:
+                    raise InputError(None, f"settings group {key!r}: {exc}") from None
+            changes[key] = value
+        return self.replace(**changes)
+
     def to_dict(self) -> dict:
         """The flat names (as ``summary.json`` always had them) and every group whole."""
         out = {key: getattr(self, key) for key in FLAT_NAMES}
@@ -362,3 +377,25 @@ class TrackerSettings:
             out[name] = {k: list(v) if isinstance(v, tuple) else v
                          for k, v in dataclasses.asdict(getattr(self, name)).items()}
         return out
+
+
+#: Named starting points for the settings (``depthtrack track --preset``), each as the groups
+#: it changes from the defaults. ``"default"``: the most accurate tracker. ``"fast"``: about
+#: twice the frames per second for a few points of accuracy (README, "Speed"): the template
+#: body (no shape fit: 16 trial frames and a re-track fewer), one pass of the per-frame search
+#: instead of two, no polish at the finer tile, and the rechecks half as often (front/back
+#: and the limbs' sides every 8th frame, the reach every 4th) -- the rechecks climb two or
+#: three poses from the coarsest rung each and were two thirds of the candidates scored.
+PRESETS = {
+    "default": {},
+    "fast": {"shape": {"enabled": False}, "search": {"passes": 1},
+             "polish": {"fine_tile": 0},
+             "heading": {"every": 8, "limb_every": 8}, "propose": {"reach_every": 4}},
+}
+
+
+def preset(name: str) -> TrackerSettings:
+    """The settings of the preset ``name`` (:data:`PRESETS`)."""
+    if name not in PRESETS:
+        raise InputError(None, f"unknown preset {name!r}; choose from {', '.join(PRESETS)}")
+    return TrackerSettings().updated(PRESETS[name])
