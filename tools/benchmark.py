@@ -230,6 +230,11 @@ def time_breakdown(sequences: list, methods: list) -> dict:
                   "init_s": float(np.mean([t["init_s"] for t in ts])),
                   "fps_mean": float(np.mean([t["fps"] for t in ts])),
                   "fps_min": float(min(t["fps"] for t in ts)), "tracks": len(ts)}
+        by_stage = [t.get("candidates_per_frame_by_stage") for t in ts]
+        if all(by_stage):            # tracks made before the count by stage have none
+            names = dict.fromkeys(k for b in by_stage for k in b)
+            out[m]["candidates_per_frame_by_stage"] = {
+                k: float(np.mean([b.get(k, 0.0) for b in by_stage])) for k in names}
     return out
 
 
@@ -321,6 +326,11 @@ def markdown(report: dict) -> str:
             out.append(f"| {m} | {t['init_s']:.1f} | " + " | ".join(
                 f"{t['per_frame_ms'].get(k, 0.0):.0f}" for k in stages) +
                 f" | {t['fps_mean']:.2f} | {t['fps_min']:.2f} |")
+        for m, t in report["time_breakdown"].items():
+            if t.get("candidates_per_frame_by_stage"):
+                out.append(f"\nCandidates scored per frame, {m}: " + ", ".join(
+                    f"{k} {v:,.0f}" for k, v in sorted(t["candidates_per_frame_by_stage"].items(),
+                                                      key=lambda kv: -kv[1])) + ".")
     out += ["", "## Per motion and condition (mean ± spread over seeds)", "",
             "| motion | condition | method | within 10 cm | mean error (cm) | max error (cm) | slowest fps |",
             "|---|---|---|---:|---:|---:|---:|"]

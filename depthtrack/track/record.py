@@ -11,7 +11,7 @@ from contextlib import contextmanager
 #: Timed stages (seconds). ``association`` and ``recover`` include the render, search,
 #: detect and evidence time spent inside them; ``search`` excludes its render time.
 STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover",
-          "heading", "propose", "reach")
+          "heading", "propose", "reach", "polish")
 #: Counters. ``correspondences`` / ``accepted`` count every correspondence the association
 #: tried / kept; ``proposal_correspondences`` / ``proposal_accepted`` those of them from the
 #: recogniser's joint proposals (``ProposalSettings.evidence``).
@@ -28,19 +28,31 @@ class Recorder:
         self.counts = {k: 0 for k in COUNTS}
         self._after_init = None
         self._counts_after_init = {}
+        self._open = []                          # stages being timed, innermost last
+        self.candidates_by_stage = {}            # candidates scored inside each stage
+        self._by_stage_after_init = {}
 
     def add(self, stage: str, seconds: float) -> None:
         self.timings[stage] += seconds
 
     def count(self, name: str, n: int = 1) -> None:
         self.counts[name] += n
+        if name == "candidates":
+            # charged to the innermost stage that wants them: not render (it only scores
+            # them), and search only where no other stage encloses it (every climb is timed
+            # as search, the rechecks' and the association's too)
+            wanting = [s for s in self._open if s not in ("render", "search")]
+            stage = wanting[-1] if wanting else ("search" if "search" in self._open else "other")
+            self.candidates_by_stage[stage] = self.candidates_by_stage.get(stage, 0) + n
 
     @contextmanager
     def timed(self, stage: str):
         t = time.perf_counter()
+        self._open.append(stage)
         try:
             yield
         finally:
+            self._open.pop()
             self.timings[stage] += time.perf_counter() - t
 
     @contextmanager
@@ -48,9 +60,11 @@ class Recorder:
         """Time ``stage`` minus what ``inner`` accumulated meanwhile (search minus render)."""
         t = time.perf_counter()
         before = self.timings[inner]
+        self._open.append(stage)
         try:
             yield
         finally:
+            self._open.pop()
             self.timings[stage] += (time.perf_counter() - t) - (self.timings[inner] - before)
 
     def initialised(self) -> bool:
@@ -58,6 +72,7 @@ class Recorder:
         if self._after_init is None:
             self._after_init = dict(self.timings)
             self._counts_after_init = dict(self.counts)
+            self._by_stage_after_init = dict(self.candidates_by_stage)
             return True
         return False
 
@@ -71,7 +86,8 @@ class Recorder:
         association loop (includes its detect, evidence, render and search time);
         ``recover`` global searches after a lost track (includes their render time);
         ``heading`` the front/back recheck (includes its render and search time);
-        ``propose`` the part recogniser and its joint proposals;
+        ``propose`` the part recogniser and its joint proposals; ``polish`` the finest rung
+        again at the finer tile (includes its render time);
         ``other`` = per-frame total minus segment, render, search, detect, evidence, propose
         (frame loading, bookkeeping).
         """
@@ -90,4 +106,10 @@ class Recorder:
                 "fps": round(frames / total, 3) if total > 0 else None,
                 "fps_excluding_init": round(tracked / tracking, 3) if frames > 1 else None,
                 "candidates_per_frame": round(cands / tracked, 1),
+                # where they went: the innermost timed stage that asked for them (the rechecks
+                # under "heading" and "reach", the per-frame climb under "search", "other"
+                # outside every stage)
+                "candidates_per_frame_by_stage": {
+                    k: round((v - self._by_stage_after_init.get(k, 0)) / tracked, 1)
+                    for k, v in sorted(self.candidates_by_stage.items())},
                 "init_candidates": int(self._counts_after_init.get("candidates", 0))}

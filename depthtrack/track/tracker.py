@@ -248,7 +248,8 @@ class Tracker:
         if self.method in ("ep", "hc+ep"):
             x, e, accepted = associate_stage(self, energy, frame, x, e)
         if self.method != "ep":
-            x, e = polish(energy, self.renderers.fine, self.climbers, s, self.recorder, x)
+            with self.recorder.timed("polish"):
+                x, e = polish(energy, self.renderers.fine, self.climbers, s, self.recorder, x)
         switched = None
         if self.method != "ep":
             x, changes, switched = self._rechecks(state, energy, frame, x)
