@@ -174,3 +174,10 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(data, tmp_path, caps
                            joints=np.zeros((2, 15, 3)))
     code, _, err = _run(capsys, short, "--track", data["exact"])          # 5-frame track, 2 frames
     assert code == 2 and "frames" in err
+
+
+def test_tracker_options_with_an_existing_track_are_refused_in_one_line(data, capsys):
+    for option in (["--preset", "fast"], ["--settings", '{"heading": {"every": 8}}']):
+        code, out, err = _run(capsys, data["seq"], "--track", data["exact"], *option)
+        assert code == 2 and out == ""
+        assert len(err.strip().splitlines()) == 1 and "not to --track" in err
