@@ -380,8 +380,9 @@ class TrackerSettings:
 
 
 #: Named starting points for the settings (``depthtrack track --preset``), each as the groups
-#: it changes from the defaults. ``"default"``: the most accurate tracker. ``"fast"``: about
-#: twice the frames per second for a few points of accuracy (README, "Speed"): the template
+#: it changes from the defaults. ``"default"``: the most accurate tracker. ``"fast"``: a few
+#: points less accurate, a 2-s clip about twice as fast (mostly the shape fit left out; each
+#: frame 3 to 20 % faster; README, "Speed"): the template
 #: body (no shape fit: 16 trial frames and a re-track fewer), one pass of the per-frame search
 #: instead of two, no polish at the finer tile, and the rechecks half as often (front/back
 #: and the limbs' sides every 8th frame, the reach every 4th) -- the rechecks climb two or
