@@ -369,25 +369,31 @@ def facing_from_truth(path) -> str:
     it). Measuring against the trunk's axis instead, as this did at first, reads a person
     bent over on frame 0 at random (the trunk's axis is then nearly horizontal).
     """
-    import numpy as np
-
-    from depthtrack.contract import JOINT_INDEX as J
     from depthtrack.io import open_sequence
 
-    seq = open_sequence(path)
-    j = np.asarray(seq.joints[0], dtype=np.float64)
+    return "camera" if truth_facing_cosines(open_sequence(path))[0] > 0 else "away"
+
+
+def truth_facing_cosines(seq) -> np.ndarray:
+    """(F,) cosine between the pelvis's forward direction and the direction from the pelvis
+    to the camera, both flattened onto the floor, per frame of ``seq``'s ground-truth joints
+    (the rule of :func:`facing_from_truth`; positive = facing the camera)."""
+    from depthtrack.contract import JOINT_INDEX as J
+
+    j = np.asarray(seq.joints, dtype=np.float64)                     # (F, 15, 3)
     placement = (seq.meta.get("synth") or {}).get("placement") or {}
     if "world_to_camera" in placement:
         up = -np.asarray(placement["world_to_camera"], dtype=np.float64)[:3, 1]   # world y is down
     else:
         up = np.array([0.0, -1.0, 0.0])
     up /= np.linalg.norm(up)
-    across = j[J["l_hip"]] - j[J["r_hip"]]
+    across = j[:, J["l_hip"]] - j[:, J["r_hip"]]
     forward = np.cross(across, up)                 # left x up: the way the pelvis faces
-    to_camera = -j[J["pelvis"]]
-    forward -= (forward @ up) * up
-    to_camera -= (to_camera @ up) * up
-    return "camera" if forward @ to_camera > 0 else "away"
+    to_camera = -j[:, J["pelvis"]]
+    forward -= (forward @ up)[:, None] * up
+    to_camera -= (to_camera @ up)[:, None] * up
+    return np.sum(forward * to_camera, axis=1) / (np.linalg.norm(forward, axis=1)
+                                                  * np.linalg.norm(to_camera, axis=1))
 
 
 def main(argv=None) -> int:

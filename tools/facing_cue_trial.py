@@ -88,30 +88,14 @@ def facing_probability(model, crops) -> np.ndarray:
     return (model.predict_proba(flat)[:, 1] + model.predict_proba(mirrored)[:, 1]) / 2
 
 
-def truth_facing_cosine(seq) -> np.ndarray:
-    """(F,) cosine between the pelvis's forward direction and the direction to the camera,
-    both flattened onto the floor (as tools/benchmark.py's ``facing_from_truth``)."""
-    from depthtrack.contract import JOINT_INDEX as J
-
-    joints = np.asarray(seq.joints, float)
-    placement = (seq.meta.get("synth") or {}).get("placement") or {}
-    up = (-np.asarray(placement["world_to_camera"], float)[:3, 1] if "world_to_camera" in placement
-          else np.array([0.0, -1.0, 0.0]))
-    up /= np.linalg.norm(up)
-    forward = np.cross(joints[:, J["l_hip"]] - joints[:, J["r_hip"]], up)
-    to_camera = -joints[:, J["pelvis"]]
-    forward -= (forward @ up)[:, None] * up
-    to_camera -= (to_camera @ up)[:, None] * up
-    return np.sum(forward * to_camera, 1) / np.linalg.norm(forward, axis=1) / np.linalg.norm(to_camera, axis=1)
-
-
 def score_sequence(model, path) -> dict:
     """Per-frame accuracy on clear frames and the first ten frames' verdict on one sequence."""
+    from benchmark import truth_facing_cosines
     from depthtrack.detect import segment_foreground
     from depthtrack.io import open_sequence
 
     seq = open_sequence(path)
-    cos = truth_facing_cosine(seq)
+    cos = truth_facing_cosines(seq)
     p = np.full(len(seq), np.nan)
     for i in range(len(seq)):
         depth = seq.depth(i)

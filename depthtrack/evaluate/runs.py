@@ -208,25 +208,25 @@ def body_for_track(track):
     return body.scaled(height=track.body_height, segment_scale=stretch)
 
 
+def _positive(value) -> bool:
+    """Whether a summary.json field holds a finite positive number."""
+    return isinstance(value, (int, float)) and bool(np.isfinite(value)) and value > 0
+
+
 def summary_seconds(summary: dict, frames: int):
     """Tracking time from a track's summary.json: ``seconds``; else ``frames / fps`` only if
     the summary says the fps is a processing rate (``processing_fps``); else ``None``."""
-    seconds = summary.get("seconds")
-    if isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0:
-        return float(seconds)
-    rate = summary.get("processing_fps")
-    if isinstance(rate, (int, float)) and np.isfinite(rate) and rate > 0:
-        return frames / float(rate)
+    if _positive(summary.get("seconds")):
+        return float(summary["seconds"])
+    if _positive(summary.get("processing_fps")):
+        return frames / float(summary["processing_fps"])
     return None
 
 
 def summary_wall_seconds(summary: dict):
     """The whole tracking work from a track's summary.json (``wall_seconds``: the body
     height and shape fits too); None in summaries written before it existed."""
-    seconds = summary.get("wall_seconds")
-    if isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0:
-        return float(seconds)
-    return None
+    return float(summary["wall_seconds"]) if _positive(summary.get("wall_seconds")) else None
 
 
 # ------------------------------------------------------------------ scoring
