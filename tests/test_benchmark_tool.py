@@ -89,3 +89,12 @@ def test_a_motion_keeps_its_condition_when_picked_out(tool, tmp_path):
     assert whole["bend"] == [{"camera": "kinect-v2", "azimuth": 120}]
     assert tool.motion_conditions("bend", places, tool.CONDITIONS_QUICK, True) == whole["bend"]
     assert tool.motion_conditions("bend", places, tool.CONDITIONS_PARITY, False) == tool.CONDITIONS_PARITY
+
+
+def test_the_report_names_the_rasteriser(tool):
+    from depthtrack.render import gl_renderer
+
+    renderer = tool.machine_renderer()
+    assert renderer["gl_renderer"] == gl_renderer() and renderer["gl_version"]
+    assert tool.renderer_label(renderer).startswith(f"GL renderer {gl_renderer()} (")
+    assert tool.renderer_label(None) == "GL renderer unknown"      # an older report

@@ -81,6 +81,8 @@ def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, t
     assert summary["wall_seconds"] >= summary["seconds"] + fit["seconds"] - 0.01
     assert summary["wall_fps"] == pytest.approx(len(seq) / summary["wall_seconds"], rel=1e-2)
     assert "trial track's frame-0 pose" in summary["initialisation"]
+    assert summary["renderer"] == {"gl_renderer": render.gl_renderer(),  # which rasteriser drew
+                                   "gl_version": ctx.info["GL_VERSION"]}
     assert summary["settings"]["shape"]["frames"] == 5
     assert summary["body_height_m"] == pytest.approx(1.75)      # given: not rescaled
     assert summary["body"]["shape"] == body.shape.to_dict() and not body.shape.is_average

@@ -285,10 +285,27 @@ def _cm(s):
     return "-" if s["mean"] is None else f"{100 * s['mean']:.1f} ± {100 * s['std']:.1f}"
 
 
+def machine_renderer():
+    """``{"gl_renderer", "gl_version"}`` of this machine's EGL (the one the tracks were drawn
+    with: figures move by a few points between rasterisers, README "On a GPU"), or None."""
+    from depthtrack.render import GLUnavailableError, gl_info
+
+    try:
+        return gl_info()
+    except GLUnavailableError:
+        return None
+
+
+def renderer_label(renderer) -> str:
+    return "GL renderer unknown" if not renderer else \
+        f"GL renderer {renderer['gl_renderer']} ({renderer['gl_version']})"
+
+
 def markdown(report: dict) -> str:
     methods = report["methods"]
     out = [f"# Held-out benchmark: {report['split']} split ({report['preset']} preset)", "",
-           f"{report['date']}, {report['machine']}, commit {report['commit']}; "
+           f"{report['date']}, {report['machine']}, {renderer_label(report.get('renderer'))}, "
+           f"commit {report['commit']}; "
            f"{report['seconds']:g} s clips at {FPS:g} fps, ToF noise, seeds {report['seeds']}; "
            f"{report['wall_s']:.0f} s wall.", "",
            "Motions: " + ", ".join(f"`{m['name']}` ({m['kind']}, start {m['start_s']:g} s)"
@@ -531,7 +548,8 @@ def main(argv=None) -> int:
     report = {
         "format": "depthtrack-benchmark/1", "split": args.split, "preset": preset_name,
         "command": command, "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-        "machine": f"{os.cpu_count()} CPUs", "commit": commit, "seconds": seconds, "fps": FPS,
+        "machine": f"{os.cpu_count()} CPUs", "renderer": machine_renderer(),
+        "commit": commit, "seconds": seconds, "fps": FPS,
         "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0, "jobs": args.jobs,
         "facing_from_truth": bool(args.facing_from_truth),
         "tracker_settings": args.settings,

@@ -15,9 +15,9 @@
 
 Shaders live in ``depthtrack/shaders/`` (package data).
 """
-from .context import GLUnavailableError, gl_context, gl_renderer
+from .context import GLUnavailableError, gl_context, gl_info, gl_renderer
 from .frame import FrameRenderer
 from .tiles import TileRenderer, full_roi, tile_camera
 
-__all__ = ["GLUnavailableError", "gl_context", "gl_renderer", "TileRenderer", "FrameRenderer",
+__all__ = ["GLUnavailableError", "gl_context", "gl_info", "gl_renderer", "TileRenderer", "FrameRenderer",
            "full_roi", "tile_camera"]

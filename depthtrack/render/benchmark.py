@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ..camera import Camera
-from .context import gl_context
+from .context import gl_context, gl_info
 from .frame import FrameRenderer
 from .tiles import TileRenderer
 
@@ -147,7 +147,7 @@ def benchmark_tiles(mesh: str = "decimated", tiles=TILES, batches=BATCHES, secon
                               cost_cpu_ms=1e3 * cost * len(poses) / last_count,
                               total_cpu_ms=1e3 * total))
         renderer.release()
-    return dict(gl_renderer=ctx.info["GL_RENDERER"], gl_version=ctx.info["GL_VERSION"],
+    return dict(**gl_info(),
                 mesh=dict(name=mesh, vertices=int(len(body.mesh.vertices)),
                           triangles=int(len(body.faces))),
                 back_faces_culled=bool(cull), smoothed=bool(smoothed),

@@ -59,6 +59,13 @@ def gl_renderer() -> str:
     return gl_context().info["GL_RENDERER"]
 
 
+def gl_info() -> dict:
+    """``{"gl_renderer", "gl_version"}`` of the shared context: which rasteriser drew (results
+    differ in the last bits between rasterisers, and a tracker's outcome can follow them)."""
+    info = gl_context().info
+    return {"gl_renderer": info["GL_RENDERER"], "gl_version": info["GL_VERSION"]}
+
+
 def shader_source(name: str) -> str:
     """Text of ``shaders/NAME`` with ``#include "other.glsl"`` lines expanded (one level deep)."""
     path = SHADER_DIR / name

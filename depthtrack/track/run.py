@@ -9,6 +9,7 @@ import numpy as np
 from ..body.skeleton import TORSO_CONTRACT_JOINTS
 from ..contract import JOINT_INDEX
 from ..errors import InputError
+from ..render.context import gl_info
 from .height import body_for_sequence, fit_body_shape
 from .settings import TrackerSettings
 from .tracker import Tracker
@@ -154,5 +155,7 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "settings": info["settings"],
         "prior": info["prior"],
         "body": {**body.to_dict(), "height_source": source, "shape_fit": shape_info},
+        # which rasteriser drew: a track can follow its last bits (README, "On a GPU")
+        "renderer": gl_info(),
     }
     return result, body, summary
