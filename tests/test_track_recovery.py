@@ -377,3 +377,28 @@ def test_a_backward_tracks_events_get_their_sequence_frames():
                                      "index": 8, "backward": True},)
     assert events["reaches"] == ({"frame": None, "limb": "l_arm", "index": 9, "backward": True},)
     assert events["heading_switches"] == () and events["limb_swaps"] == ()
+
+
+def test_the_rechecks_climbs_begin_on_the_configured_rung(squat):
+    """``heading.refit_level``: the rechecks' climbs skip the coarsest rungs and score fewer
+    candidates; the frames' own search is the same, and a track right from the start stays
+    right."""
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x0 = fit_pose_to_joints(body, truth[0])
+    depths = [squat.depth(i) for i in range(4)]
+    heading = {}
+    for level in (0, 3):
+        settings = TrackerSettings(heading={"every": 1, "limb_every": 0, "refit_level": level},
+                                   propose={"reach_every": 0}, polish={"fine_tile": 0},
+                                   search={"passes": 1})
+        with Tracker(body, squat.camera, settings=settings) as tracker:
+            state, _, _ = tracker.start(TrackingState(), depths[0], pose=x0)
+            poses = []
+            for depth in depths[1:]:
+                state, x = tracker.advance(state, depth)
+                poses.append(x)
+            heading[level] = tracker.recorder.candidates_by_stage["heading"]
+            assert not state.heading_switches
+        assert _errors(body.joint_positions(np.array(poses)), truth[1:4]).max() < 0.1
+    assert heading[3] < 0.8 * heading[0]

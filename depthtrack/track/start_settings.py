@@ -186,6 +186,13 @@ class HeadingSettings:
     pose inherits its contortions; from the rest pose it does not (dev 05_20, Kinect v2 from
     120 degrees, seed 2: 20 % -> 88 % of joints within 10 cm, the start check now keeping
     the twin; 105_05 seed 3 62 -> 72 %; five other dev sequences unchanged).
+
+    ``refit_level``: the rung of the start's step ladder (``SearchSettings.levels +
+    extra_levels`` rungs, the coarsest ``step_factor`` times the per-frame steps) on which
+    every recheck's climbs -- the tracked pose's, the twins', the reach candidates' -- begin
+    (0 = the coarsest). The tracked pose and the twins fitted to its joints start near a
+    minimum; the coarsest steps are for a search that starts far off, and the rechecks'
+    climbs were about two thirds of the candidates scored (README, "Speed").
     """
 
     frames: int = 10
@@ -206,6 +213,7 @@ class HeadingSettings:
     twin_starts: tuple = ("turned", "rest")
     limb_every: int = 4
     limb_margin: float = 0.05
+    refit_level: int = 0
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -214,7 +222,7 @@ class HeadingSettings:
                                                f"{', '.join(START_TWINS)}, not {self.start_twin!r}")
         _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
-                  "limb_every", "limb_margin", allow_zero=True)
+                  "limb_every", "limb_margin", "refit_level", allow_zero=True)
         _positive(self, "votes", "twin_passes")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),

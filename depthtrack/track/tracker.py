@@ -296,7 +296,8 @@ class Tracker:
             key = np.asarray(pose, dtype=np.float64).tobytes()
             if key not in fitted:
                 fitted[key] = climb(bare, self.climbers.start, pose, self.recorder,
-                                    passes=self.settings.heading.twin_passes)
+                                    passes=self.settings.heading.twin_passes,
+                                    level_offset=self.settings.heading.refit_level)
             return fitted[key]
 
         pixels = float(np.count_nonzero(frame.foreground.mask))
