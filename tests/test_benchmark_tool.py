@@ -1,4 +1,5 @@
-"""tools/benchmark.py: which motions, which commands, and the statistics over seeds."""
+"""tools/benchmark.py and tools/benchmark_report.py: which motions, which commands, and the
+statistics over seeds."""
 import importlib.util
 import json
 from pathlib import Path
@@ -9,12 +10,22 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope="module")
-def tool():
-    spec = importlib.util.spec_from_file_location("benchmark", REPO / "tools" / "benchmark.py")
+def _load(name):
+    spec = importlib.util.spec_from_file_location(name, REPO / "tools" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+@pytest.fixture(scope="module")
+def tool():
+    return _load("benchmark")
+
+
+@pytest.fixture(scope="module")
+def report():
+    """tools/benchmark_report.py: the statistics and the Markdown report."""
+    return _load("benchmark_report")
 
 
 def test_splits_are_disjoint_and_quick_takes_mocap_and_procedural(tool, tmp_path):
@@ -91,10 +102,10 @@ def test_a_motion_keeps_its_condition_when_picked_out(tool, tmp_path):
     assert tool.motion_conditions("bend", places, tool.CONDITIONS_PARITY, False) == tool.CONDITIONS_PARITY
 
 
-def test_the_report_names_the_rasteriser(tool):
+def test_the_report_names_the_rasteriser(report):
     from depthtrack.render import gl_renderer
 
-    renderer = tool.machine_renderer()
+    renderer = report.machine_renderer()
     assert renderer["gl_renderer"] == gl_renderer() and renderer["gl_version"]
-    assert tool.renderer_label(renderer).startswith(f"GL renderer {gl_renderer()} (")
-    assert tool.renderer_label(None) == "GL renderer unknown"      # an older report
+    assert report.renderer_label(renderer).startswith(f"GL renderer {gl_renderer()} (")
+    assert report.renderer_label(None) == "GL renderer unknown"      # an older report
