@@ -97,3 +97,26 @@ def test_overall_is_sequence_weighted():
 def test_shape_mismatch_is_rejected():
     with pytest.raises(ValueError):
         metrics.point_errors(np.zeros((2, 3, 3)), np.zeros((2, 4, 3)))
+
+
+def test_back_to_front_marks_a_trunk_facing_away_and_leaves_unknown_frames_out():
+    from depthtrack.body import BodyModel
+    from depthtrack.body.skeleton import MODEL_UP
+    from depthtrack.track.heading import SIDES_SWAPPED, turned_pose
+
+    body = BodyModel.default(height=1.75)
+    pose = np.zeros(body.dof)
+    pose[0:3] = (0.1, 0.0, 3.0)
+    truth = np.repeat(np.asarray(body.joint_positions(pose))[None], 4, axis=0)   # (4, 15, 3)
+    est = truth.copy()
+    est[1] = np.asarray(body.joint_positions(turned_pose(pose)))   # half a turn: away
+    est[2] = truth[2][SIDES_SWAPPED]                              # sides exchanged: away too
+    est[3] = nan                                                   # no estimate
+    turned = pose.copy()
+    turned[3:6] = np.radians(60) * MODEL_UP                         # a turn short of profile
+    flags = metrics.back_to_front(np.concatenate([est, np.asarray(body.joint_positions(turned))[None]]),
+                                  np.concatenate([truth, truth[:1]]))
+    assert flags[:3].tolist() == [0.0, 1.0, 1.0] and math.isnan(flags[3]) and flags[4] == 0.0
+    s = metrics.summarize(metrics.joint_errors(est, truth), 4, reversed_frames=flags[:4])
+    assert s["back_to_front_fraction"] == pytest.approx(2 / 3)      # of the three known frames
+    assert metrics.summarize(metrics.joint_errors(est, truth), 4)["back_to_front_fraction"] is None

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 #: The metrics aggregated over seeds (``depthtrack eval --json``'s names).
-METRICS = ("within_10cm", "mean_error_m", "max_error_m", "marker_mean_error_m", "fps", "wall_fps")
+METRICS = ("within_10cm", "mean_error_m", "max_error_m", "marker_mean_error_m", "fps", "wall_fps",
+           "back_to_front_fraction")
 
 
 def condition_label(c: dict) -> str:
@@ -110,6 +111,10 @@ def _wall(o):
     return f"{s['mean']:.2f}, {o['wall_fps_min']:.2f}"
 
 
+#: A statistic a report made before the metric existed lacks.
+_UNKNOWN = {"mean": None, "std": None, "n": 0}
+
+
 def _pct(s):
     return "-" if s["mean"] is None else f"{100 * s['mean']:.0f} ± {100 * s['std']:.0f}%"
 
@@ -152,13 +157,15 @@ def markdown(report: dict) -> str:
              if report.get("tracker_preset", "default") != "default" else []),
            "## Overall (each motion-condition group weighs the same; ± = spread over seeds)", "",
            "| method | within 10 cm | mean error (cm) | max error (cm) | marker avg (cm) | fps (mean) | "
-           "worst group within 10 cm | slowest sequence fps | fps with the body fits (mean, slowest) |",
-           "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+           "worst group within 10 cm | slowest sequence fps | fps with the body fits (mean, slowest) | "
+           "frames back to front |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for m in methods:
         o = report["overall"][m]
         out.append(f"| {m} | {_pct(o['within_10cm'])} | {_cm(o['mean_error_m'])} | {_cm(o['max_error_m'])} | "
                    f"{_cm(o['marker_mean_error_m'])} | {o['fps']['mean']:.2f} | "
-                   f"{100 * o['worst_group_within_10cm']:.0f}% | {o['fps_min']:.2f} | {_wall(o)} |")
+                   f"{100 * o['worst_group_within_10cm']:.0f}% | {o['fps_min']:.2f} | {_wall(o)} | "
+                   f"{_pct(o.get('back_to_front_fraction') or _UNKNOWN)} |")
     if report.get("by_condition") and len(report["by_condition"]) > 1:
         out += ["", "## Per condition (mean over the motions; ± = spread over seeds)", "",
                 "| condition | " + " | ".join(f"{m} within 10 cm" for m in methods) + " |",
@@ -182,20 +189,25 @@ def markdown(report: dict) -> str:
                     f"{k} {v:,.0f}" for k, v in sorted(t["candidates_per_frame_by_stage"].items(),
                                                       key=lambda kv: -kv[1])) + ".")
     out += ["", "## Per motion and condition (mean ± spread over seeds)", "",
-            "| motion | condition | method | within 10 cm | mean error (cm) | max error (cm) | slowest fps |",
-            "|---|---|---|---:|---:|---:|---:|"]
+            "| motion | condition | method | within 10 cm | mean error (cm) | max error (cm) | slowest fps | "
+            "frames back to front |",
+            "|---|---|---|---:|---:|---:|---:|---:|"]
     for r in report["groups"]:
         for m in methods:
             g = r["methods"][m]
             out.append(f"| {r['motion']} | {r['condition']} | {m} | {_pct(g['within_10cm'])} | "
-                       f"{_cm(g['mean_error_m'])} | {_cm(g['max_error_m'])} | {g['fps_min']:.2f} |")
-    out += ["", "## Per sequence", "", "| sequence | method | frames | within 10 cm | mean error (cm) | fps |",
-            "|---|---|---:|---:|---:|---:|"]
+                       f"{_cm(g['mean_error_m'])} | {_cm(g['max_error_m'])} | {g['fps_min']:.2f} | "
+                       f"{_pct(g.get('back_to_front_fraction') or _UNKNOWN)} |")
+    out += ["", "## Per sequence", "",
+            "| sequence | method | frames | within 10 cm | mean error (cm) | fps | back to front |",
+            "|---|---|---:|---:|---:|---:|---:|"]
     for s in report["sequences"]:
         for m in methods:
             x = s["metrics"][m]
+            b2f = x.get("back_to_front_fraction")
             out.append(f"| {s['name']} | {m} | {x['frames']} | {100 * x['within_10cm']:.0f}% | "
-                       f"{100 * x['mean_error_m']:.1f} | {x['fps']:.2f} |")
+                       f"{100 * x['mean_error_m']:.1f} | {x['fps']:.2f} | "
+                       f"{'-' if b2f is None else f'{100 * b2f:.0f}%'} |")
     out += ["", "## Commands", "", "```", report["command"]]
     for s in report["sequences"]:
         out.append(s["synth_command"])

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..contract import JOINT_INDEX
 from .fit import FIT_KEYS
 
 #: A joint closer than this to its ground truth counts as "within" (metres).
@@ -164,8 +165,41 @@ def frames_per_second(frames: int, seconds) -> float:
     return float(frames) / seconds if np.isfinite(seconds) and seconds > 0 else float("nan")
 
 
+#: The contract joint pairs whose left-to-right vectors, summed, are a trunk's sideways axis.
+TRUNK_SIDES = (("l_hip", "r_hip"), ("l_shoulder", "r_shoulder"))
+
+
+def back_to_front(estimated, truth):
+    """Which frames a track has back to front: its trunk facing away from the true one.
+
+    A body seen from the wrong side is the tracker's costliest mistake (every joint's side
+    exchanged; the hips and shoulders a trunk's width off while head, neck and pelvis are
+    right), and the one a depth image hides best. The trunk's sideways axis is the sum of
+    the left-to-right vectors of the hips and the shoulders (:data:`TRUNK_SIDES`); a frame is
+    back to front when the tracked axis points against the true one (their angle over 90
+    degrees: the trunk turned more than a quarter turn about its long axis, or mirrored).
+
+    Parameters
+    ----------
+    estimated, truth : (F, 15, 3) float
+        Contract joints; NaN where unknown.
+
+    Returns
+    -------
+    (F,) float
+        1.0 back to front, 0.0 not, NaN where either side's joints are unknown.
+    """
+    def sideways(joints):
+        j = np.asarray(joints, dtype=np.float64)
+        return sum(j[:, JOINT_INDEX[r]] - j[:, JOINT_INDEX[lft]] for lft, r in TRUNK_SIDES)
+
+    dot = np.sum(sideways(estimated) * sideways(truth), axis=-1)
+    return np.where(np.isfinite(dot), (dot < 0).astype(np.float64), np.nan)
+
+
 def summarize(joint_err, frames: int, seconds=None, marker_err=None,
-              threshold: float = WITHIN_THRESHOLD_M, fit=None, shape=None, wall_seconds=None) -> dict:
+              threshold: float = WITHIN_THRESHOLD_M, fit=None, shape=None, wall_seconds=None,
+              reversed_frames=None) -> dict:
     """The summary figures of one track of one sequence.
 
     Parameters
@@ -184,12 +218,15 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
         :func:`depthtrack.evaluate.fit.summarize_fit` (no ground truth needed).
     shape : dict or None
         :func:`depthtrack.evaluate.fit.shape_errors` (synthetic sequences with a shape).
+    reversed_frames : (F,) float or None
+        :func:`back_to_front`; its mean over the known frames is ``back_to_front_fraction``.
 
     Returns
     -------
     dict with ``frames, fps, wall_fps, mean_error_m, max_error_m, within_10cm,
     marker_mean_error_m, marker_max_error_m, silhouette_iou, unexplained_fraction,
-    median_depth_residual_m, segment_length_error_m`` (:data:`METRIC_KEYS`) and, with
+    median_depth_residual_m, segment_length_error_m, back_to_front_fraction``
+    (:data:`METRIC_KEYS`) and, with
     ``shape``, ``segment_length_errors_m`` {segment: metres}; unknown values are ``None``.
     """
     def finite_or_none(x):
@@ -207,12 +244,16 @@ def summarize(joint_err, frames: int, seconds=None, marker_err=None,
         **{k: finite_or_none((fit or {}).get(k)) for k in FIT_KEYS},
         "segment_length_error_m": finite_or_none((shape or {}).get("segment_length_error_m")),
         **({"segment_length_errors_m": shape.get("segment_length_errors_m")} if shape else {}),
+        # the share of the frames known on both sides (mean_error's mean over known entries)
+        "back_to_front_fraction": None if reversed_frames is None else finite_or_none(
+            mean_error(reversed_frames)),
     }
 
 
 #: Keys of :func:`summarize`'s result, in report order.
 METRIC_KEYS = ("frames", "fps", "wall_fps", "mean_error_m", "max_error_m", "within_10cm",
-               "marker_mean_error_m", "marker_max_error_m", *FIT_KEYS, "segment_length_error_m")
+               "marker_mean_error_m", "marker_max_error_m", *FIT_KEYS, "segment_length_error_m",
+               "back_to_front_fraction")
 
 
 def average_summaries(summaries) -> dict:
@@ -236,5 +277,6 @@ def average_summaries(summaries) -> dict:
 
 __all__ = ["WITHIN_THRESHOLD_M", "point_errors", "joint_errors", "mean_error", "per_frame_mean",
            "per_frame_max", "per_point_mean", "mean_max_error", "fraction_within", "marker_errors",
+           "back_to_front", "TRUNK_SIDES",
            "average_marker_error", "max_marker_error", "frames_per_second", "summarize",
            "METRIC_KEYS", "average_summaries"]

@@ -259,12 +259,13 @@ def fit_markdown_table(rows) -> str:
 def markdown_table(rows) -> str:
     """Markdown table of ``rows``: iterable of (label, method, M)."""
     lines = ["| sequence | method | frames | mean error (cm) | max error (cm) | within 10 cm | "
-             "marker avg (cm) | marker max (cm) | fps |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "marker avg (cm) | marker max (cm) | fps | back to front |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for label, method, m in rows:
         lines.append(f"| {label} | {method} | {m['frames']} | {_cm(m['mean_error_m'])} | "
                      f"{_cm(m['max_error_m'])} | {_pct(m['within_10cm'])} | "
-                     f"{_cm(m['marker_mean_error_m'])} | {_cm(m['marker_max_error_m'])} | {_fps(m['fps'])} |")
+                     f"{_cm(m['marker_mean_error_m'])} | {_cm(m['marker_max_error_m'])} | {_fps(m['fps'])} | "
+                     f"{_pct(m.get('back_to_front_fraction'))} |")
     return "\n".join(lines) + "\n"
 
 
@@ -287,7 +288,10 @@ def format_markdown(evaluation, data=None) -> str:
         f"{100 * metrics.WITHIN_THRESHOLD_M:.0f} cm; *marker avg / max* are the paper's metrics "
         "(per frame the mean / largest distance between the visible mocap markers and the same "
         "markers on the fitted mesh, averaged over frames; n/a without markers); *fps* is frames "
-        "tracked per second of wall-clock time. The *all* rows average the sequences, each "
+        "tracked per second of wall-clock time; *back to front* is the share of frames whose "
+        "tracked trunk faces away from the true one (the left-to-right axis of hips and "
+        "shoulders against the truth's: the body seen from the wrong side). The *all* rows "
+        "average the sequences, each "
         "sequence weighing the same (frames: the total).",
         "",
         "## Fit to the depth (no ground truth needed)",
