@@ -302,8 +302,8 @@ class Tracker:
 
         pixels = float(np.count_nonzero(frame.foreground.mask))
         with self.recorder.timed("heading"):
-            y, changes, turned = recheck_heading(state, x, refit, self._twins, pixels,
-                                                 self.settings)
+            y, changes, turned = recheck_heading(state, x, refit, lambda pose: self._recheck_twins(
+                bare, pose), pixels, self.settings)
             if turned:
                 return y, changes, "heading"
             y, more, swapped = recheck_limb_sides(
@@ -332,6 +332,16 @@ class Tracker:
         """The swapped twins of ``pose (48,)`` the heading checks climb, ``(K, 48)``
         (:attr:`HeadingSettings.twin_starts`)."""
         return swapped_twins(self.body, pose, self.settings.heading.twin_starts)
+
+    def _recheck_twins(self, energy, pose):
+        """The twins of ``pose (48,)`` the heading recheck climbs, ``(k, 48)``: with
+        :attr:`HeadingSettings.twin_climbs` ``k > 0``, the ``k`` of :meth:`_twins` with the
+        lowest unclimbed ``energy`` (one batch); else all of them."""
+        twins = self._twins(pose)
+        k = self.settings.heading.twin_climbs
+        if k <= 0 or k >= len(twins):
+            return twins
+        return twins[np.argsort(energy(twins), kind="stable")[:k]]
 
     def _flip_searcher(self, energy, frame):
         """``(heading, body_axis) -> (pose, energy)``: the global search on ``frame`` with
