@@ -402,3 +402,21 @@ def test_the_rechecks_climbs_begin_on_the_configured_rung(squat):
             assert not state.heading_switches
         assert _errors(body.joint_positions(np.array(poses)), truth[1:4]).max() < 0.1
     assert heading[3] < 0.8 * heading[0]
+
+
+def test_the_recheck_climbs_only_the_twin_fits_lowest_before_climbing(squat):
+    body = BodyModel.default(height=1.75)
+    x = fit_pose_to_joints(body, squat.joints[0])
+    target = np.asarray(body.joint_positions(x))[SIDES_SWAPPED]
+
+    def energy(poses):              # any energy: here the twin's distance to its target joints
+        joints = np.asarray(body.joint_positions(np.asarray(poses)))
+        return np.linalg.norm(joints - target, axis=-1).mean(axis=-1)
+
+    for k, want in ((0, 2), (1, 1), (2, 2)):
+        with Tracker(body, squat.camera, settings=TrackerSettings(heading={"twin_climbs": k})) as tracker:
+            twins = tracker._twins(x)
+            picked = tracker._recheck_twins(energy, x)
+        assert len(twins) == 2 and picked.shape == (want, 48)
+        if want == 1:
+            np.testing.assert_array_equal(picked[0], twins[int(np.argmin(energy(twins)))])
