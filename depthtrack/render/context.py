@@ -56,7 +56,7 @@ def gl_context():
 
 def gl_renderer() -> str:
     """The GL_RENDERER string of the shared context, e.g. ``'llvmpipe (LLVM 15.0.6, 256 bits)'``."""
-    return gl_context().info["GL_RENDERER"]
+    return gl_info()["gl_renderer"]
 
 
 def gl_info() -> dict:
