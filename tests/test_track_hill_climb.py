@@ -91,3 +91,41 @@ def test_recovers_a_perturbed_pose_from_rendered_depth():
     err0 = np.linalg.norm(body.joint_positions(start) - body.joint_positions(truth), axis=1)
     assert err.mean() < 0.04 < err0.mean()
     assert err.max() < 0.10
+
+
+def test_pelvis_alone_turns_only_the_pelvis_and_carries_the_hip_sockets():
+    # SearchGroup.isolate: the third set of pelvis moves keeps the chest's and the thighs'
+    # world rotations; only the hip sockets (rigid with the pelvis) and what hangs from
+    # them move, by a translation
+    from depthtrack.body.model import BodyModel
+    from depthtrack.body.skeleton import JOINT_ID
+    from depthtrack.contract import JOINT_INDEX
+    from depthtrack.motion.prior import apply_velocity
+    from depthtrack.track.energy import spine_twist
+
+    body = BodyModel.default()
+    rng = np.random.default_rng(3)
+    x = np.zeros(48)
+    x[3:6] = [0.2, 0.6, -0.1]
+    x[6:] = rng.normal(0.0, 0.25, 42)
+    x = body.clip(x[None])[0]
+    plain = default_blocks(1.0, False)[1][0]
+    alone = default_blocks(1.0, False, pelvis_alone=True)[1][0]
+    assert plain.isolate == () and alone.isolate == (JOINT_ID["spine"],)
+    moves = alone.moves(0.12, x)
+    assert len(moves) == len(plain.moves(0.12, x)) + 6
+    turned = apply_velocity(x, moves[-6:])
+    j0 = np.asarray(body.joint_positions(x))
+    j = np.asarray(body.joint_positions(turned))
+    # the twist moves (about the pelvis's own vertical, moves 1 and 4) leave the neck and
+    # shoulders where they were and change the chest's twist by exactly the step
+    for m in (1, 4):
+        for name in ("neck", "head", "l_shoulder", "r_shoulder"):
+            np.testing.assert_allclose(j[m, JOINT_INDEX[name]], j0[JOINT_INDEX[name]], atol=0.004)
+        assert abs(abs(spine_twist(turned[m])[0] - spine_twist(x)[0]) - 0.12) < 0.02
+    # a leg moves rigidly with its hip socket: knee minus hip unchanged
+    for m in range(6):
+        for side in ("l_", "r_"):
+            np.testing.assert_allclose(j[m, JOINT_INDEX[side + "knee"]] - j[m, JOINT_INDEX[side + "hip"]],
+                                       j0[JOINT_INDEX[side + "knee"]] - j0[JOINT_INDEX[side + "hip"]],
+                                       atol=1e-6)

@@ -4,6 +4,7 @@ MAP energy of a candidate pose ``x`` with velocity ``v = x (-) x_{t-1}``::
 
     E(x) = w * A * mean_tile_cost(x) + 0.5 * sum(((v - v_pred) / sigma)^2)
                                      + 0.5 * sum((x_joints / pose_prior_std)^2)
+                                     + 0.5 * (spine_twist(x) / twist_std)^2
 
 ``mean_tile_cost`` is :meth:`TileRenderer.costs` (smoothed or pixel likelihood, each pixel's
 cost a negative log-likelihood), ``A`` the ROI's area in camera pixels, so ``A * mean`` is
@@ -11,7 +12,11 @@ the negative log-likelihood summed over the camera pixels the tile covers, and
 ``w = likelihood_weight`` (1 = pixels independent, as in the paper's model); the second term
 is ``-log p(v_t | v_{t-1})`` of :class:`~depthtrack.motion.prior.ConstantVelocityPrior` (only
 while tracking: :meth:`Energy.with_prior`); the third a weak pose prior on the joint
-rotations (:attr:`EnergySettings.pose_prior_std`, our addition for hidden limbs).
+rotations (:attr:`EnergySettings.pose_prior_std`, our addition for hidden limbs); the fourth
+a prior on the trunk's twist (:func:`spine_twist`, :attr:`EnergySettings.twist_std`, also
+ours): the likelihood barely sees which way the pelvis points under a chest and legs that
+it does see, and without it a turning track twisted its pelvis 30 to 70 degrees behind
+the chest, the hip joints 10 to 20 cm off, where a person twists a few degrees.
 
 An :class:`Energy` is immutable: the mode of a search (with or without the motion prior,
 the coarse or the fine renderer) is a different Energy, never a switched flag.
@@ -22,6 +27,31 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
+
+
+#: Parameters of the spine's rotation vector in a pose (the chest against the pelvis).
+SPINE_ROTATION = slice(6, 9)
+
+
+def spine_twist(poses) -> np.ndarray:
+    """``(N,)`` twist (rad) of the chest against the pelvis about the trunk's long axis.
+
+    The twist of the swing-twist decomposition of the spine's rotation about the model's
+    vertical axis (``ry``, :mod:`depthtrack.body.skeleton`): with the rotation's quaternion
+    ``(w, x, y, z)``, ``2 atan2(y, w)``, wrapped to (-pi, pi]. Unlike the rotation vector's
+    ``ry`` component it does not change when the chest also bends.
+
+    Parameters
+    ----------
+    poses : (N, 48) or (48,) float
+    """
+    r = np.atleast_2d(np.asarray(poses, dtype=np.float64))[:, SPINE_ROTATION]
+    angle = np.linalg.norm(r, axis=1)
+    half = 0.5 * angle
+    # sin(half) / angle * r_y without dividing by a zero angle
+    sinc = np.where(angle > 1e-12, np.sin(half) / np.maximum(angle, 1e-12), 0.5)
+    twist = 2.0 * np.arctan2(sinc * r[:, 1], np.cos(half))
+    return (twist + np.pi) % (2.0 * np.pi) - np.pi
 
 
 @dataclass(frozen=True)
@@ -37,6 +67,8 @@ class Energy:
     smoothed : bool
     recorder : Recorder
     pose_prior_std : float
+    twist_std : float
+        Standard deviation (rad) of the trunk-twist prior (0 = off).
     prior : ConstantVelocityPrior or None
         With ``previous (48,)`` and ``v_pred (48,)``: the motion-prior term; None = off.
     """
@@ -46,6 +78,7 @@ class Energy:
     smoothed: bool
     recorder: object
     pose_prior_std: float = 1.0
+    twist_std: float = 0.0
     prior: object = None
     previous: np.ndarray | None = None
     v_pred: np.ndarray | None = None
@@ -79,6 +112,8 @@ class Energy:
             e = e + self.prior.penalty(poses, self.previous, self.v_pred)
         if self.pose_prior_std > 0:
             e = e + 0.5 * np.sum((poses[:, 6:] / self.pose_prior_std) ** 2, axis=1)
+        if self.twist_std > 0:
+            e = e + 0.5 * (spine_twist(poses) / self.twist_std) ** 2
         return e
 
     def one(self, pose) -> float:

@@ -16,7 +16,8 @@ drops to the next finer step; a group that moved tries the same step again; a gr
 the search when its finest step fails. Moves are +-step along each parameter of the group,
 plus, for the rotation groups, the four diagonal moves in the plane of the first two axes,
 and for the pelvis and the spine the same rotations with the children counter-rotated
-(:attr:`SearchGroup.compensate`). Compensation with ``-R_c^T delta``: the parent's world
+(:attr:`SearchGroup.compensate`), and optionally the pelvis turned alone, the chest and the
+legs kept (:attr:`SearchGroup.isolate`). Compensation with ``-R_c^T delta``: the parent's world
 rotation becomes ``W_p R(delta)``; a child c keeps ``W_c = W_p R_c`` when its local rotation
 becomes ``R(-delta) R_c = R_c R(-R_c^T delta)``, i.e. the local velocity ``-R_c^T delta``.
 
@@ -52,6 +53,12 @@ class SearchGroup:
         the +-step rotations of this joint are repeated with the inverse rotation given to
         these children, so the chest can turn under arms that stay where they are (a ridge
         of the likelihood that single-joint moves cannot follow).
+    isolate : tuple of int
+        Further children kept, with ``compensate``'s, in a third set of +-step rotations:
+        with all its children kept, the joint's own segment alone turns (the pelvis between
+        a chest and legs that stay, the hip sockets carried round). The likelihood barely
+        sees that segment, so a track can leave it twisted against the chest; a single-joint
+        or half-compensated move turns the chest or the legs with it and is refused.
     """
 
     name: str
@@ -59,6 +66,7 @@ class SearchGroup:
     step: float
     diagonals: bool = False
     compensate: tuple = ()
+    isolate: tuple = ()
 
     def moves(self, step: float, pose=None, dof: int = 48) -> np.ndarray:
         """(M, dof) velocity moves at ``step`` from ``pose (dof,)``: +-step along each parameter,
@@ -71,15 +79,25 @@ class SearchGroup:
             unit = np.concatenate([unit, d])
         out = np.zeros((len(unit), dof))
         out[:, list(self.params)] = unit * step
-        if self.compensate and pose is not None and k == 3:
-            base = out[:2 * k].copy()
-            delta = base[:, list(self.params)]                      # (2k, 3) rotation steps
-            for c in self.compensate:
-                R_c = rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3 + 3 * c: 6 + 3 * c])
-                # child's local velocity -R_c^T delta keeps its world rotation (module docstring)
-                base[:, 3 + 3 * c: 6 + 3 * c] = -delta @ R_c
-            out = np.concatenate([out, base])
+        if pose is None or k != 3:
+            return out
+        sets = [self.compensate] if self.compensate else []
+        if self.isolate:
+            sets.append(self.compensate + self.isolate)
+        for kept in sets:
+            out = np.concatenate([out, self._compensated(out[:2 * k], kept, pose)])
         return out
+
+    def _compensated(self, unit_moves, kept, pose) -> np.ndarray:
+        """``unit_moves (2k, dof)`` (this joint's +-step rotations) with every child in
+        ``kept`` given the inverse rotation, so it keeps its world rotation."""
+        base = unit_moves.copy()
+        delta = base[:, list(self.params)]                          # (2k, 3) rotation steps
+        for c in kept:
+            R_c = rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3 + 3 * c: 6 + 3 * c])
+            # child's local velocity -R_c^T delta keeps its world rotation (module docstring)
+            base[:, 3 + 3 * c: 6 + 3 * c] = -delta @ R_c
+        return base
 
 
 def _rot(joint: int):
@@ -88,21 +106,25 @@ def _rot(joint: int):
 
 
 
-def default_blocks(step_scale: float = 1.0, diagonals: bool = True):
+def default_blocks(step_scale: float = 1.0, diagonals: bool = True, pelvis_alone: bool = False):
     """The root-to-limbs schedule: a list of blocks, each a list of :class:`SearchGroup`.
 
     Coarsest steps (at 25 fps, times ``step_scale``): pelvis 6 cm and 0.12 rad, spine 0.12
     rad, neck 0.2, shoulders and hips 0.3, elbows and knees 0.35, wrists and ankles 0.4 rad.
+    ``pelvis_alone``: the pelvis also turns alone, the chest kept with the legs
+    (:attr:`SearchGroup.isolate`).
     """
     s = float(step_scale)
 
-    def g(name, step, diag=True, compensate=()):
+    def g(name, step, diag=True, compensate=(), isolate=()):
         return SearchGroup(name, _rot(JOINT_ID[name]), step * s, diag and diagonals,
-                           tuple(JOINT_ID[c] for c in compensate))
+                           tuple(JOINT_ID[c] for c in compensate),
+                           tuple(JOINT_ID[c] for c in isolate))
 
     return [
         [SearchGroup("pelvis_t", (0, 1, 2), 0.06 * s, diagonals)],
-        [g("pelvis", 0.12, compensate=("l_hip", "r_hip"))],
+        [g("pelvis", 0.12, compensate=("l_hip", "r_hip"),
+           isolate=("spine",) if pelvis_alone else ())],
         [g("spine", 0.12, compensate=("neck", "l_shoulder", "r_shoulder"))],
         [g("neck", 0.2), g("l_shoulder", 0.3), g("r_shoulder", 0.3), g("l_hip", 0.3), g("r_hip", 0.3)],
         [g("l_elbow", 0.35), g("r_elbow", 0.35), g("l_knee", 0.35), g("r_knee", 0.35)],

@@ -96,14 +96,20 @@ class EnergySettings:
         pose (0 = off). Not in the paper: where a limb is hidden the likelihood is flat and
         the search would let it drift into any pose; this keeps it plausible while costing
         a visible limb almost nothing (a 1.5 rad bend costs 1.1, a mismatched pixel 1).
+    twist_std : float
+        Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
+        (:func:`~.energy.spine_twist`; 0 = off). Not in the paper: under a chest and legs the
+        image fixes, the likelihood barely tells which way the pelvis points (:mod:`.energy`).
     """
 
     damping: float = 0.7
     likelihood_weight: float = 1.0
     pose_prior_std: float = 1.0
+    twist_std: float = 0.0
 
     def __post_init__(self):
-        _positive(self, "damping", "likelihood_weight", "pose_prior_std", allow_zero=True)
+        _positive(self, "damping", "likelihood_weight", "pose_prior_std", "twist_std",
+                  allow_zero=True)
 
 
 @dataclass(frozen=True)
@@ -123,6 +129,9 @@ class SearchSettings:
         Times the schedule runs per frame.
     diagonals : bool
         Include the diagonal moves.
+    pelvis_alone : bool
+        Also turn the pelvis alone, the chest and the legs kept (six more candidates in the
+        pelvis's batches; :attr:`~.hill_climb.SearchGroup.isolate`).
     """
 
     levels: int = 3
@@ -130,6 +139,7 @@ class SearchSettings:
     step_scale: float = 1.0
     passes: int = 2
     diagonals: bool = False
+    pelvis_alone: bool = False
 
     def __post_init__(self):
         _positive(self, "levels", "max_iterations", "step_scale", "passes")

@@ -184,7 +184,7 @@ class Tracker:
     def _energy(self, frame) -> Energy:
         """The energy of ``frame`` (uploaded) without the motion prior, on the coarse tiles."""
         return Energy(self.renderers.coarse, frame.weight, self.smoothed, self.recorder,
-                      self.settings.energy.pose_prior_std)
+                      self.settings.energy.pose_prior_std, self.settings.energy.twist_std)
 
     def person_present(self, foreground) -> bool:
         """Whether a :class:`~depthtrack.detect.Foreground` holds a person."""
