@@ -129,3 +129,28 @@ def test_pelvis_alone_turns_only_the_pelvis_and_carries_the_hip_sockets():
             np.testing.assert_allclose(j[m, JOINT_INDEX[side + "knee"]] - j[m, JOINT_INDEX[side + "hip"]],
                                        j0[JOINT_INDEX[side + "knee"]] - j0[JOINT_INDEX[side + "hip"]],
                                        atol=1e-6)
+
+
+def test_untwist_moves_turn_the_pelvis_back_by_fractions_of_the_chest_twist():
+    from depthtrack.body.model import BodyModel
+    from depthtrack.contract import JOINT_INDEX
+    from depthtrack.motion.prior import apply_velocity
+    from depthtrack.track.energy import spine_twist
+
+    body = BodyModel.default()
+    rng = np.random.default_rng(0)
+    x = np.zeros(48)
+    x[3:6] = [0.2, 0.5, -0.1]
+    x[6:] = rng.normal(0.0, 0.2, 42)
+    x[7] = 0.7                                         # the chest twisted 40 degrees
+    x = body.clip(x[None])[0]
+    group = default_blocks(1.0, False, untwist=(0.5, 1.0))[1][0]
+    moves = group.moves(0.12, x)
+    assert len(moves) == len(default_blocks(1.0, False)[1][0].moves(0.12, x)) + 2
+    turned = apply_velocity(x, moves[-2:])
+    np.testing.assert_allclose(spine_twist(turned), [0.5 * spine_twist(x)[0], 0.0], atol=1e-9)
+    j0, j = np.asarray(body.joint_positions(x)), np.asarray(body.joint_positions(turned))
+    for name in ("head", "neck", "l_shoulder", "r_wrist"):       # the chest and arms stay
+        np.testing.assert_allclose(j[:, JOINT_INDEX[name]], np.repeat(j0[None, JOINT_INDEX[name]], 2, 0),
+                                   atol=1e-9)
+    assert np.linalg.norm(j[1, JOINT_INDEX["l_hip"]] - j0[JOINT_INDEX["l_hip"]]) > 0.03

@@ -59,6 +59,11 @@ class SearchGroup:
         a chest and legs that stay, the hip sockets carried round). The likelihood barely
         sees that segment, so a track can leave it twisted against the chest; a single-joint
         or half-compensated move turns the chest or the legs with it and is refused.
+    untwist : tuple of float
+        For the pelvis: one more move per fraction ``f``, the pelvis turned alone (the chest
+        and ``compensate``'s children kept) about its own vertical by ``f`` times the
+        chest's twist against it (:func:`~.energy.spine_twist`), so that twist shrinks by
+        that fraction in one step, however large it has grown.
     """
 
     name: str
@@ -67,6 +72,7 @@ class SearchGroup:
     diagonals: bool = False
     compensate: tuple = ()
     isolate: tuple = ()
+    untwist: tuple = ()
 
     def moves(self, step: float, pose=None, dof: int = 48) -> np.ndarray:
         """(M, dof) velocity moves at ``step`` from ``pose (dof,)``: +-step along each parameter,
@@ -86,11 +92,18 @@ class SearchGroup:
             sets.append(self.compensate + self.isolate)
         for kept in sets:
             out = np.concatenate([out, self._compensated(out[:2 * k], kept, pose)])
+        if self.untwist:
+            from .energy import spine_twist
+
+            twist = float(spine_twist(pose)[0])
+            turns = np.zeros((len(self.untwist), dof))
+            turns[:, self.params[1]] = np.asarray(self.untwist, dtype=np.float64) * twist
+            out = np.concatenate([out, self._compensated(turns, self.compensate + (SPINE,), pose)])
         return out
 
     def _compensated(self, unit_moves, kept, pose) -> np.ndarray:
-        """``unit_moves (2k, dof)`` (this joint's +-step rotations) with every child in
-        ``kept`` given the inverse rotation, so it keeps its world rotation."""
+        """``unit_moves (M, dof)`` (rotations of this joint) with every child in ``kept``
+        given the inverse rotation, so it keeps its world rotation."""
         base = unit_moves.copy()
         delta = base[:, list(self.params)]                          # (2k, 3) rotation steps
         for c in kept:
@@ -106,25 +119,31 @@ def _rot(joint: int):
 
 
 
-def default_blocks(step_scale: float = 1.0, diagonals: bool = True, pelvis_alone: bool = False):
+#: Skeleton index of the spine (the chest), a child of the pelvis.
+SPINE = JOINT_ID["spine"]
+
+
+def default_blocks(step_scale: float = 1.0, diagonals: bool = True, pelvis_alone: bool = False,
+                   untwist=()):
     """The root-to-limbs schedule: a list of blocks, each a list of :class:`SearchGroup`.
 
     Coarsest steps (at 25 fps, times ``step_scale``): pelvis 6 cm and 0.12 rad, spine 0.12
     rad, neck 0.2, shoulders and hips 0.3, elbows and knees 0.35, wrists and ankles 0.4 rad.
     ``pelvis_alone``: the pelvis also turns alone, the chest kept with the legs
-    (:attr:`SearchGroup.isolate`).
+    (:attr:`SearchGroup.isolate`); ``untwist``: fractions of the chest's twist the pelvis
+    may turn back by in one move (:attr:`SearchGroup.untwist`).
     """
     s = float(step_scale)
 
-    def g(name, step, diag=True, compensate=(), isolate=()):
+    def g(name, step, diag=True, compensate=(), isolate=(), untwist=()):
         return SearchGroup(name, _rot(JOINT_ID[name]), step * s, diag and diagonals,
                            tuple(JOINT_ID[c] for c in compensate),
-                           tuple(JOINT_ID[c] for c in isolate))
+                           tuple(JOINT_ID[c] for c in isolate), tuple(float(f) for f in untwist))
 
     return [
         [SearchGroup("pelvis_t", (0, 1, 2), 0.06 * s, diagonals)],
         [g("pelvis", 0.12, compensate=("l_hip", "r_hip"),
-           isolate=("spine",) if pelvis_alone else ())],
+           isolate=("spine",) if pelvis_alone else (), untwist=untwist)],
         [g("spine", 0.12, compensate=("neck", "l_shoulder", "r_shoulder"))],
         [g("neck", 0.2), g("l_shoulder", 0.3), g("r_shoulder", 0.3), g("l_hip", 0.3), g("r_hip", 0.3)],
         [g("l_elbow", 0.35), g("r_elbow", 0.35), g("l_knee", 0.35), g("r_knee", 0.35)],

@@ -41,9 +41,9 @@ class Climbers:
         s, g = settings.search, settings.start
         step_scale = s.step_scale * 25.0 / float(fps)
         return cls(
-            frame=HillClimber(blocks=default_blocks(step_scale, s.diagonals, s.pelvis_alone),
+            frame=HillClimber(blocks=default_blocks(step_scale, s.diagonals, s.pelvis_alone, s.untwist),
                               levels=s.levels, max_iterations=s.max_iterations, clip=clip),
-            fine=HillClimber(blocks=default_blocks(step_scale, s.diagonals, s.pelvis_alone),
+            fine=HillClimber(blocks=default_blocks(step_scale, s.diagonals, s.pelvis_alone, s.untwist),
                              levels=s.levels,
                              max_iterations=settings.polish.fine_iterations, clip=clip),
             start=HillClimber(blocks=default_blocks(g.step_factor * step_scale, g.diagonals),

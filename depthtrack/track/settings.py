@@ -132,6 +132,10 @@ class SearchSettings:
     pelvis_alone : bool
         Also turn the pelvis alone, the chest and the legs kept (six more candidates in the
         pelvis's batches; :attr:`~.hill_climb.SearchGroup.isolate`).
+    untwist : tuple of float
+        Fractions of the chest's twist against the pelvis by which the pelvis may turn back,
+        alone, in one move (one candidate each in the pelvis's batches;
+        :attr:`~.hill_climb.SearchGroup.untwist`; empty = none).
     """
 
     levels: int = 3
@@ -140,9 +144,13 @@ class SearchSettings:
     passes: int = 2
     diagonals: bool = False
     pelvis_alone: bool = False
+    untwist: tuple = ()
 
     def __post_init__(self):
         _positive(self, "levels", "max_iterations", "step_scale", "passes")
+        object.__setattr__(self, "untwist", tuple(float(f) for f in self.untwist))
+        _check(all(0.0 < f <= 1.0 for f in self.untwist),
+               f"untwist fractions must lie in (0, 1], not {self.untwist}")
 
 
 @dataclass(frozen=True)
