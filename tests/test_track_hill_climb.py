@@ -154,3 +154,48 @@ def test_untwist_moves_turn_the_pelvis_back_by_fractions_of_the_chest_twist():
         np.testing.assert_allclose(j[:, JOINT_INDEX[name]], np.repeat(j0[None, JOINT_INDEX[name]], 2, 0),
                                    atol=1e-9)
     assert np.linalg.norm(j[1, JOINT_INDEX["l_hip"]] - j0[JOINT_INDEX["l_hip"]]) > 0.03
+
+
+def test_untwist_moves_bring_back_a_pelvis_left_behind_the_chest():
+    # the failure they are for: the person turned 50 degrees, the track's pelvis 46 degrees
+    # behind with the chest and legs where they are (the hip sockets off). The plain
+    # schedule leaves the twist (34 degrees when written, the hips 5 and 10 cm off); with
+    # the untwist moves the hips come back
+    from depthtrack.body import BodyModel
+    from depthtrack.body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+    from depthtrack.camera import Camera
+    from depthtrack.contract import JOINT_INDEX
+    from depthtrack.motion.prior import apply_velocity
+    from depthtrack.render import FrameRenderer, TileRenderer
+    from depthtrack.track.energy import spine_twist
+    from depthtrack.track.hill_climb import SPINE
+    from depthtrack.track.observation import square_roi
+
+    body = BodyModel.default(1.75)
+    camera = Camera.preset("sr4000")
+    truth = body.default_pose((0.1, 0.05, 3.2))
+    turned = rotation_about(np.array([0.0, 1.0, 0.0]), 0.9) @ rotvec_to_matrix(truth[3:6])
+    truth[3:6] = matrix_to_rotvec(turned[None])[0]
+    truth[12:15] = [-0.4, 0.0, 0.4]
+    truth[30] = -0.4
+    truth[33] = 0.3
+    depth = FrameRenderer(camera).render(body, truth)
+    tiles = TileRenderer(body.with_mesh("decimated"), camera, tile=64)
+    try:
+        tiles.set_observation(np.where(depth > 0, depth, np.inf).astype(np.float32),
+                              roi=square_roi(depth > 0, 0.15))
+        pelvis = default_blocks()[1][0]
+        behind = np.zeros((1, 48))
+        behind[0, 4] = -0.8                    # the pelvis alone turned back, chest kept
+        start = apply_velocity(truth, pelvis._compensated(behind, pelvis.compensate + (SPINE,),
+                                                          truth))[0]
+        assert np.degrees(spine_twist(start)[0]) > 40
+        hips = [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
+        climber = HillClimber(blocks=default_blocks(1.0, False, untwist=(0.5, 1.0)),
+                              clip=body.clip, levels=3)
+        res = climber.climb(start, lambda p: tiles.costs(p), passes=2)
+        err = np.linalg.norm(body.joint_positions(res.pose) - body.joint_positions(truth), axis=1)
+        assert abs(np.degrees(spine_twist(res.pose)[0])) < 12
+        assert err[hips].max() < 0.04 and err.mean() < 0.03
+    finally:
+        tiles.release()
