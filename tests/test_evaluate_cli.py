@@ -17,7 +17,8 @@ from depthtrack.body.markers import MARKER_NAMES, marker_positions
 FRAMES = 5
 METRIC_KEYS = {"frames", "fps", "wall_fps", "mean_error_m", "max_error_m", "within_10cm",
                "marker_mean_error_m", "marker_max_error_m", "silhouette_iou", "unexplained_fraction",
-               "median_depth_residual_m", "segment_length_error_m", "back_to_front_fraction"}
+               "median_depth_residual_m", "segment_length_error_m", "back_to_front_fraction",
+               "trunk_twist_error_deg"}
 
 
 @pytest.fixture(scope="module")

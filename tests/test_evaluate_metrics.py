@@ -120,3 +120,30 @@ def test_back_to_front_marks_a_trunk_facing_away_and_leaves_unknown_frames_out()
     s = metrics.summarize(metrics.joint_errors(est, truth), 4, reversed_frames=flags[:4])
     assert s["back_to_front_fraction"] == pytest.approx(2 / 3)      # of the three known frames
     assert metrics.summarize(metrics.joint_errors(est, truth), 4)["back_to_front_fraction"] is None
+
+
+def test_trunk_twist_is_the_chest_turned_against_the_hips_whatever_the_lean():
+    from depthtrack.body import BodyModel
+    from depthtrack.body.rotations import matrix_to_rotvec, rotation_about
+
+    body = BodyModel.default(height=1.75)
+    up = np.array([0.0, 1.0, 0.0])
+    poses = []
+    for twist, lean in ((0.0, 0.0), (30.0, 0.0), (-45.0, 0.0), (30.0, 50.0)):
+        x = np.zeros(body.dof)
+        x[0:3] = (0.0, 0.0, 3.0)
+        # the whole body leaned (root), the chest twisted about its own vertical (spine)
+        x[3:6] = matrix_to_rotvec(rotation_about(np.array([1.0, 0.0, 0.0]), np.radians(lean))[None])[0]
+        x[6:9] = matrix_to_rotvec(rotation_about(up, np.radians(twist))[None])[0]
+        poses.append(np.asarray(body.joint_positions(x)))
+    joints = np.array(poses)
+    tw = metrics.trunk_twist(joints)
+    # the rest pose's chest joints sit over the pelvis, so the twist is the spine's own;
+    # right-handed about the pelvis-to-neck axis, which points along the model's -y
+    np.testing.assert_allclose(tw - tw[0], [0.0, -30.0, 45.0, -30.0], atol=0.5)
+    err = metrics.twist_errors(joints, joints[[0, 0, 0, 0]])
+    np.testing.assert_allclose(err, [0.0, 30.0, 45.0, 30.0], atol=0.5)
+    joints[2] = nan
+    s = metrics.summarize(metrics.joint_errors(joints, joints), 4,
+                          twist_err=metrics.twist_errors(joints, joints[[0, 0, 0, 0]]))
+    assert s["trunk_twist_error_deg"] == pytest.approx(20.0, abs=0.5)   # of the three known

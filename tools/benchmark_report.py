@@ -12,7 +12,7 @@ import numpy as np
 
 #: The metrics aggregated over seeds (``depthtrack eval --json``'s names).
 METRICS = ("within_10cm", "mean_error_m", "max_error_m", "marker_mean_error_m", "fps", "wall_fps",
-           "back_to_front_fraction")
+           "back_to_front_fraction", "trunk_twist_error_deg")
 
 
 def condition_label(c: dict) -> str:
@@ -115,6 +115,10 @@ def _wall(o):
 _UNKNOWN = {"mean": None, "std": None, "n": 0}
 
 
+def _deg(s):
+    return "-" if s["mean"] is None else f"{s['mean']:.1f} ± {s['std']:.1f}"
+
+
 def _pct(s):
     return "-" if s["mean"] is None else f"{100 * s['mean']:.0f} ± {100 * s['std']:.0f}%"
 
@@ -158,14 +162,15 @@ def markdown(report: dict) -> str:
            "## Overall (each motion-condition group weighs the same; ± = spread over seeds)", "",
            "| method | within 10 cm | mean error (cm) | max error (cm) | marker avg (cm) | fps (mean) | "
            "worst group within 10 cm | slowest sequence fps | fps with the body fits (mean, slowest) | "
-           "frames back to front |",
-           "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+           "frames back to front | trunk twist error (deg) |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for m in methods:
         o = report["overall"][m]
         out.append(f"| {m} | {_pct(o['within_10cm'])} | {_cm(o['mean_error_m'])} | {_cm(o['max_error_m'])} | "
                    f"{_cm(o['marker_mean_error_m'])} | {o['fps']['mean']:.2f} | "
                    f"{100 * o['worst_group_within_10cm']:.0f}% | {o['fps_min']:.2f} | {_wall(o)} | "
-                   f"{_pct(o.get('back_to_front_fraction') or _UNKNOWN)} |")
+                   f"{_pct(o.get('back_to_front_fraction') or _UNKNOWN)} | "
+                   f"{_deg(o.get('trunk_twist_error_deg') or _UNKNOWN)} |")
     if report.get("by_condition") and len(report["by_condition"]) > 1:
         out += ["", "## Per condition (mean over the motions; ± = spread over seeds)", "",
                 "| condition | " + " | ".join(f"{m} within 10 cm" for m in methods) + " |",

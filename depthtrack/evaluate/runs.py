@@ -273,6 +273,7 @@ def score(name, method, seq, joints, poses=None, body=None, seconds=None, masks=
     shape = fit_figures.shape_errors(body, fit_figures.shape_truth(seq))
     summary = metrics.summarize(joint_err, F, seconds, marker_err, wall_seconds=wall_seconds,
                                 reversed_frames=metrics.back_to_front(joints, truth),
+                                twist_err=metrics.twist_errors(joints, truth),
                                 fit=None if per_frame is None else fit_figures.summarize_fit(per_frame),
                                 shape=shape if shape["segment_length_errors_m"] else None)
     return MethodResult(name, method, joints, joint_err, marker_err, names, seconds, summary, poses, body,
