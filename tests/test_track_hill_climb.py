@@ -93,6 +93,17 @@ def test_recovers_a_perturbed_pose_from_rendered_depth():
     assert err.max() < 0.10
 
 
+def _bent_pose(body, seed, spread, root=(0.2, 0.5, -0.1), chest_twist=None):
+    """A pose ``(48,)`` turned by ``root`` with every joint bent at random (``spread`` rad),
+    the spine's ``ry`` set to ``chest_twist`` when given, within the joint limits."""
+    x = np.zeros(48)
+    x[3:6] = root
+    x[6:] = np.random.default_rng(seed).normal(0.0, spread, 42)
+    if chest_twist is not None:
+        x[7] = chest_twist
+    return body.clip(x[None])[0]
+
+
 def test_pelvis_alone_turns_only_the_pelvis_and_carries_the_hip_sockets():
     # SearchGroup.isolate: the third set of pelvis moves keeps the chest's and the thighs'
     # world rotations; only the hip sockets (rigid with the pelvis) and what hangs from
@@ -104,11 +115,7 @@ def test_pelvis_alone_turns_only_the_pelvis_and_carries_the_hip_sockets():
     from depthtrack.track.energy import spine_twist
 
     body = BodyModel.default()
-    rng = np.random.default_rng(3)
-    x = np.zeros(48)
-    x[3:6] = [0.2, 0.6, -0.1]
-    x[6:] = rng.normal(0.0, 0.25, 42)
-    x = body.clip(x[None])[0]
+    x = _bent_pose(body, 3, 0.25, root=(0.2, 0.6, -0.1))
     plain = default_blocks(1.0, False)[1][0]
     alone = default_blocks(1.0, False, pelvis_alone=True)[1][0]
     assert plain.isolate == () and alone.isolate == (JOINT_ID["spine"],)
@@ -138,12 +145,7 @@ def test_untwist_moves_turn_the_pelvis_back_by_fractions_of_the_chest_twist():
     from depthtrack.track.energy import spine_twist
 
     body = BodyModel.default()
-    rng = np.random.default_rng(0)
-    x = np.zeros(48)
-    x[3:6] = [0.2, 0.5, -0.1]
-    x[6:] = rng.normal(0.0, 0.2, 42)
-    x[7] = 0.7                                         # the chest twisted 40 degrees
-    x = body.clip(x[None])[0]
+    x = _bent_pose(body, 0, 0.2, chest_twist=0.7)       # the chest twisted 40 degrees
     group = default_blocks(1.0, False, untwist=(0.5, 1.0))[1][0]
     moves = group.moves(0.12, x)
     assert len(moves) == len(default_blocks(1.0, False)[1][0].moves(0.12, x)) + 2
