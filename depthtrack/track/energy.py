@@ -15,8 +15,10 @@ while tracking: :meth:`Energy.with_prior`); the third a weak pose prior on the j
 rotations (:attr:`EnergySettings.pose_prior_std`, our addition for hidden limbs); the fourth
 a prior on the trunk's twist (:func:`spine_twist`, :attr:`EnergySettings.twist_std`, also
 ours): the likelihood barely sees which way the pelvis points under a chest and legs that
-it does see, and without it a turning track twisted its pelvis 30 to 70 degrees behind
-the chest, the hip joints 10 to 20 cm off, where a person twists a few degrees.
+it does see, and a turning track left its pelvis 30 to 70 degrees behind the chest, the hip
+joints 10 to 20 cm off, where a person twists a few degrees. The prior alone is outweighed
+by the motion prior; the search's untwist moves (:attr:`SearchSettings.untwist`) give it
+a step that turns the pelvis back at once.
 
 An :class:`Energy` is immutable: the mode of a search (with or without the motion prior,
 the coarse or the fine renderer) is a different Energy, never a switched flag.

@@ -33,6 +33,7 @@ import numpy as np
 from ..body.rotations import rotvec_to_matrix
 from ..body.skeleton import JOINT_ID
 from ..motion.prior import apply_velocity
+from .energy import spine_twist
 
 
 @dataclass(frozen=True)
@@ -93,8 +94,6 @@ class SearchGroup:
         for kept in sets:
             out = np.concatenate([out, self._compensated(out[:2 * k], kept, pose)])
         if self.untwist:
-            from .energy import spine_twist
-
             twist = float(spine_twist(pose)[0])
             turns = np.zeros((len(self.untwist), dof))
             turns[:, self.params[1]] = np.asarray(self.untwist, dtype=np.float64) * twist
@@ -105,7 +104,7 @@ class SearchGroup:
         """``unit_moves (M, dof)`` (rotations of this joint) with every child in ``kept``
         given the inverse rotation, so it keeps its world rotation."""
         base = unit_moves.copy()
-        delta = base[:, list(self.params)]                          # (2k, 3) rotation steps
+        delta = base[:, list(self.params)]                          # (M, 3) rotation steps
         for c in kept:
             R_c = rotvec_to_matrix(np.asarray(pose, dtype=np.float64)[3 + 3 * c: 6 + 3 * c])
             # child's local velocity -R_c^T delta keeps its world rotation (module docstring)

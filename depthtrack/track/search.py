@@ -40,11 +40,11 @@ class Climbers:
     def build(cls, settings, fps: float, clip=None) -> "Climbers":
         s, g = settings.search, settings.start
         step_scale = s.step_scale * 25.0 / float(fps)
+        blocks = default_blocks(step_scale, s.diagonals, s.pelvis_alone, s.untwist)
         return cls(
-            frame=HillClimber(blocks=default_blocks(step_scale, s.diagonals, s.pelvis_alone, s.untwist),
-                              levels=s.levels, max_iterations=s.max_iterations, clip=clip),
-            fine=HillClimber(blocks=default_blocks(step_scale, s.diagonals, s.pelvis_alone, s.untwist),
-                             levels=s.levels,
+            frame=HillClimber(blocks=blocks, levels=s.levels, max_iterations=s.max_iterations,
+                              clip=clip),
+            fine=HillClimber(blocks=blocks, levels=s.levels,
                              max_iterations=settings.polish.fine_iterations, clip=clip),
             start=HillClimber(blocks=default_blocks(g.step_factor * step_scale, g.diagonals),
                               levels=s.levels + g.extra_levels, max_iterations=g.max_iterations,
