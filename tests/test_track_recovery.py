@@ -153,16 +153,23 @@ def test_a_mirrored_start_is_corrected_while_tracking(squat):
     body = BodyModel.default(height=1.75)
     truth = squat.joints
     x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
+    # the default corrects it by frame 7 in the search, with no heading switch: the untwist
+    # moves do it (with them off the track stays mirrored until the recheck's switch)
+    every = TrackerSettings().heading.every
     with Tracker(body, squat.camera, settings=TrackerSettings()) as tracker:
+        err = _errors(tracker.track_sequence(squat, init_pose=x0).joints, truth)
+    assert err[0] > 0.25 and err[2 * every:].max() < 0.1
+    # the heading recheck alone (untwist moves off) corrects it too, by a switch
+    alone = TrackerSettings().updated({"search": {"untwist": []}})
+    with Tracker(body, squat.camera, settings=alone) as tracker:
         result = tracker.track_sequence(squat, init_pose=x0)
         switches = tracker.describe()["heading_switches"]
     err = _errors(result.joints, truth)
     assert err[0] > 0.25                          # the start is the mirrored twin
-    assert len(switches) == 1 and switches[0]["frame"] <= 2 * TrackerSettings().heading.every
+    assert len(switches) == 1 and switches[0]["frame"] <= 2 * every
     assert err[switches[0]["frame"]:].max() < 0.1  # corrected from the switch on
     # the same start with the recheck off stays mirrored
-    with Tracker(body, squat.camera, settings=TrackerSettings(
-            heading=TrackerSettings().heading.__class__(every=0))) as tracker:
+    with Tracker(body, squat.camera, settings=alone.updated({"heading": {"every": 0}})) as tracker:
         stuck = _errors(tracker.track_sequence(squat, init_pose=x0).joints, truth)
     if stuck[-5:].min() <= 0.25 and not software_renderer():
         # on an H200 another stage (not the heading recheck) turned this track too
