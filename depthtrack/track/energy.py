@@ -30,9 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..body.skeleton import JOINT_ID
 
-#: Parameters of the spine's rotation vector in a pose (the chest against the pelvis).
-SPINE_ROTATION = slice(6, 9)
+#: Parameters of the spine's rotation vector in a pose (the chest against the pelvis),
+#: from the skeleton's joint order (joint j's rotation is ``3 + 3j .. 5 + 3j``).
+SPINE_ROTATION = slice(3 + 3 * JOINT_ID["spine"], 6 + 3 * JOINT_ID["spine"])
 
 
 def spine_twist(poses) -> np.ndarray:
