@@ -18,6 +18,11 @@ from .observation import estimate_height, robust_points, visible_area
 from .renderers import RendererSet
 from .settings import TrackerSettings
 
+#: The settings groups that turn every recheck off while tracking (the shape fit's trial
+#: without :attr:`ShapeSettings.trial_rechecks`); the start's front/back check stays.
+NO_RECHECKS = {"heading": {"every": 0, "limb_every": 0, "search_every": 0},
+               "propose": {"reach_every": 0}}
+
 
 def parabola_vertex(heights, energies, k: int) -> float:
     """Height at the vertex of the parabola through the best height ``k`` and its neighbours,
@@ -184,7 +189,10 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     from .shape_fit import fit_shape
     from .tracker import Tracker
 
-    s = (settings or TrackerSettings()).shape
+    settings = settings or TrackerSettings()
+    s = settings.shape
+    if not s.trial_rechecks:
+        settings = settings.updated(NO_RECHECKS)
     if segmenter is None:
         from ..detect import segment_foreground as segmenter
     t0 = time.perf_counter()

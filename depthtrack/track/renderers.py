@@ -5,7 +5,8 @@ import numpy as np
 
 
 class RendererSet:
-    """The candidate renderer, the polish's finer one and the full-frame silhouette renderer.
+    """The candidate renderer, the polish's finer one, the rechecks' renderers at other tile
+    sides (made when first asked for: :meth:`at_tile`) and the full-frame silhouette renderer.
 
     One owner releases them (:meth:`release`, or ``with``). Bodies that share a mesh (the
     default body at any height) share a set: :meth:`set_body`; so the height fit scores
@@ -41,6 +42,8 @@ class RendererSet:
                 self.coarse.release()
             raise
         self._frame = None
+        self._others = {}           # tile side -> TileRenderer made by at_tile
+        self._uploaded = None       # the last frame uploaded, for a renderer made later
 
     def __enter__(self):
         return self
@@ -51,15 +54,32 @@ class RendererSet:
     def set_body(self, body) -> None:
         """Score ``body`` from now on (it must share the mesh of the set's body)."""
         self.body = body
-        for r in (self.coarse, self.fine):
+        for r in (self.coarse, self.fine, *self._others.values()):
             if r is not None:
                 r.set_body(body)
 
     def upload(self, frame) -> None:
         """Make ``frame`` (:class:`~.observe.Frame`) the observation every renderer scores against."""
-        self.coarse.set_observation(frame.observed, roi=frame.roi)
-        if self.fine is not None:
-            self.fine.set_observation(frame.observed, roi=frame.roi)
+        self._uploaded = frame
+        for r in (self.coarse, self.fine, *self._others.values()):
+            if r is not None:
+                r.set_observation(frame.observed, roi=frame.roi)
+
+    def at_tile(self, tile: int):
+        """The candidate renderer at ``tile`` pixels (0 = :attr:`coarse`), scoring the last
+        uploaded frame; made on the first call and owned by the set."""
+        if not tile or tile == self.coarse.tile:
+            return self.coarse
+        if self.fine is not None and tile == self.fine.tile:
+            return self.fine
+        if tile not in self._others:
+            from ..render import TileRenderer
+
+            renderer = TileRenderer(self.body, self.camera, tile=tile)
+            if self._uploaded is not None:
+                renderer.set_observation(self._uploaded.observed, roi=self._uploaded.roi)
+            self._others[tile] = renderer
+        return self._others[tile]
 
     def silhouette(self, pose) -> np.ndarray:
         """(H, W) bool: where ``pose (48,)`` covers the full camera image (one GL render)."""
@@ -70,7 +90,10 @@ class RendererSet:
 
     def release(self) -> None:
         """Free every GL object of the set (idempotent)."""
-        for r in (self.coarse if self._own_coarse else None, self.fine, self._frame):
+        for r in (self.coarse if self._own_coarse else None, self.fine, self._frame,
+                  *self._others.values()):
             if r is not None:
                 r.release()
         self.coarse = self.fine = self._frame = None
+        self._others = {}
+        self._uploaded = None

@@ -201,6 +201,14 @@ class HeadingSettings:
     not, the two leads differed by a median 0.005 of energy per pixel (once 0.12); one
     climb fewer per recheck scored 10 % fewer candidates per frame on the dev wide preset
     with the same accuracy (82.3 against 82.2 %), so 1 is the default (README, "Speed").
+
+    ``recheck_tile``: the tile side (pixels) every recheck's climbs and comparisons are
+    rendered at (0 = the search's, :attr:`ObserveSettings.tile`). The rechecks ask which of
+    a few whole-body hypotheses explains a frame better -- facing, the limbs' sides, a reach
+    -- and are most of the candidates a frame scores; a coarser tile costs about half as
+    much per candidate on llvmpipe (``depthtrack bench``). Every hypothesis of one recheck is
+    scored at the same tile, and the energy is a mean per pixel times the ROI's area, so the
+    margins keep their meaning.
     """
 
     frames: int = 10
@@ -223,6 +231,7 @@ class HeadingSettings:
     limb_margin: float = 0.05
     refit_level: int = 0
     twin_climbs: int = 1
+    recheck_tile: int = 0
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -233,6 +242,7 @@ class HeadingSettings:
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", allow_zero=True)
         _positive(self, "votes", "twin_passes")
+        _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
                f"HeadingSettings.twin_starts must be a non-empty choice of "
@@ -275,6 +285,12 @@ class ShapeSettings:
     leaves 9.2 % of the person's pixels unexplained against 13.0 %: what a user without
     ground truth sees of the fit. Joints within 10 cm moved by +0.8 points on four dev
     people (s.d. 7.7): no loss in accuracy, for 16 trial frames and a fit of a few seconds.
+
+    ``trial_rechecks``: whether the trial tracker runs the rechecks while tracking (front/back,
+    the limbs' sides, the reach; :class:`HeadingSettings`). The fit takes a few of the
+    trial's poses, and the re-track starts from the first frame's, which the start and its
+    front/back check decide before any recheck can run; the rechecks, most of the candidates
+    a frame scores, change the trial's later poses only where a track went wrong.
     """
 
     enabled: bool = True
@@ -284,10 +300,13 @@ class ShapeSettings:
     rounds: int = 1
     max_iterations: int = 20
     prior_weight: float = 30.0
+    trial_rechecks: bool = True
 
     def __post_init__(self):
         _check(isinstance(self.enabled, bool), f"ShapeSettings.enabled must be true or false, "
                                                f"not {self.enabled!r}")
+        _check(isinstance(self.trial_rechecks, bool), f"ShapeSettings.trial_rechecks must be "
+                                                      f"true or false, not {self.trial_rechecks!r}")
         _check(int(self.fit_frames) >= 1, f"ShapeSettings.fit_frames must be at least 1, "
                                           f"not {self.fit_frames!r}")
         _check(int(self.frames) >= int(self.fit_frames),

@@ -281,7 +281,8 @@ class Tracker:
         return state, x.copy(), energy.without_prior().one(x) / pixels
 
     def _rechecks(self, state, energy, frame, x):
-        """The rechecks of a frame (coarse renderer, no motion prior), each where due:
+        """The rechecks of a frame (no motion prior, tiles of
+        :attr:`HeadingSettings.recheck_tile` pixels), each where due:
         :func:`.heading.recheck_heading`, then :func:`.heading.recheck_limb_sides`, then with
         the recogniser :func:`.reach.recheck_reach`, then :func:`.heading.recheck_by_search`;
         the first that replaces the pose ends them.
@@ -289,7 +290,7 @@ class Tracker:
         Returns ``(pose, state changes, switched)``: ``switched`` is None, or which recheck
         replaced the pose (``"heading"``, ``"limbs"``, ``"reach"``, ``"search"``).
         """
-        bare = energy.without_prior()
+        bare = energy.without_prior().on(self.renderers.at_tile(self.settings.heading.recheck_tile))
         fitted = {}                          # the tracked pose is climbed once for every recheck
 
         def refit(pose):
