@@ -51,11 +51,24 @@ def rotvec_to_matrix(rotvec):
     Stable for angles near 0 (Taylor series) and exact up to and beyond pi.
     """
     r = np.asarray(rotvec, dtype=np.float64)
-    theta = np.linalg.norm(r, axis=-1)
-    a, b = _sinc_terms(theta)
-    K = skew(r)
-    eye = np.broadcast_to(np.eye(3), K.shape)
-    return eye + a[..., None, None] * K + b[..., None, None] * (K @ K)
+    x, y, z = r[..., 0], r[..., 1], r[..., 2]
+    xx, yy, zz = x * x, y * y, z * z
+    a, b = _sinc_terms(np.sqrt(xx + yy + zz))
+    # I + a K + b K^2 with K = skew(r), written out entry by entry (K^2 = r r^T - |r|^2 I):
+    # the same sums as the matrix form, without its temporaries
+    ax, ay, az = a * x, a * y, a * z
+    bxy, bxz, byz = b * (x * y), b * (x * z), b * (y * z)
+    out = np.empty(r.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1.0 - b * (zz + yy)
+    out[..., 0, 1] = bxy - az
+    out[..., 0, 2] = bxz + ay
+    out[..., 1, 0] = bxy + az
+    out[..., 1, 1] = 1.0 - b * (zz + xx)
+    out[..., 1, 2] = byz - ax
+    out[..., 2, 0] = bxz - ay
+    out[..., 2, 1] = byz + ax
+    out[..., 2, 2] = 1.0 - b * (yy + xx)
+    return out
 
 
 def rotvec_to_quat(rotvec):
@@ -140,14 +153,14 @@ def quat_multiply(a, b):
     """Hamilton product ``a * b`` of quaternions ``(..., 4)`` (x, y, z, w): rotation b first, then a."""
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
-    ax, ay, az, aw = np.moveaxis(a, -1, 0)
-    bx, by, bz, bw = np.moveaxis(b, -1, 0)
-    return np.stack([
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    ], -1)
+    ax, ay, az, aw = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    bx, by, bz, bw = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = aw * bx + ax * bw + ay * bz - az * by
+    out[..., 1] = aw * by - ax * bz + ay * bw + az * bx
+    out[..., 2] = aw * bz + ax * by - ay * bx + az * bw
+    out[..., 3] = aw * bw - ax * bx - ay * by - az * bz
+    return out
 
 
 def compose_rotvec(a, b):

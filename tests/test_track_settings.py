@@ -30,6 +30,10 @@ def test_bad_values_are_refused_when_made(kwargs):
 def test_groups_are_frozen_and_checked_on_their_own():
     with pytest.raises(InputError):
         AssociateSettings(accept="energy")
+    with pytest.raises(InputError):
+        HeadingSettings(recheck_tile=48)
+    with pytest.raises(InputError):
+        TrackerSettings(shape={"trial_rechecks": "no"})
     s = TrackerSettings()
     with pytest.raises(Exception):
         s.search.passes = 5                     # frozen: a stage cannot switch modes in place
@@ -83,3 +87,13 @@ def test_settings_laid_over_a_preset_change_only_the_fields_they_name():
     assert tracker_settings(SimpleNamespace(settings=summary)) == tracker_settings(SimpleNamespace(preset="fast"))
     # --shape-fit still has the last word
     assert tracker_settings(SimpleNamespace(preset="fast", shape_fit="on")).shape.enabled is True
+
+
+def test_the_shape_trial_without_rechecks_keeps_the_start_check():
+    from depthtrack.track.height import NO_RECHECKS
+
+    s = TrackerSettings().updated(NO_RECHECKS)
+    assert (s.heading.every, s.heading.limb_every, s.heading.search_every) == (0, 0, 0)
+    assert s.propose.reach_every == 0
+    assert s.heading.frames == TrackerSettings().heading.frames > 0     # the start's check stays
+

@@ -175,3 +175,32 @@ def test_the_trial_reads_ahead_for_its_front_back_check(shaped_sequence):
     _, short = fit_body_shape(frames(2), BodyModel.default(1.75), seq.camera, fps=seq.fps,
                               settings=settings, fit_scale=False, method="hc")
     assert "heading_check" not in short["start_info"]
+
+
+def test_the_trial_without_rechecks_still_checks_its_start(shaped_sequence, monkeypatch):
+    """ShapeSettings.trial_rechecks=False: the trial tracks with every recheck off (each
+    frame's heading recheck sees every=0) and its start's front/back check still runs."""
+    from depthtrack.track import ShapeSettings, TrackerSettings
+    from depthtrack.track import tracker as tracker_module
+    from depthtrack.track.height import fit_body_shape
+
+    seq, _ = shaped_sequence
+    seen = []
+    original = tracker_module.recheck_heading
+
+    def recorded(state, pose, refit, twins, pixels, settings):
+        seen.append(settings.heading.every)
+        return original(state, pose, refit, twins, pixels, settings)
+
+    monkeypatch.setattr(tracker_module, "recheck_heading", recorded)
+    for rechecks in (True, False):
+        seen.clear()
+        settings = TrackerSettings(heading={"frames": 2, "every": 1}, start={"complete_fraction": 0.0},
+                                   shape=ShapeSettings(frames=3, fit_frames=2, rounds=1,
+                                                       max_iterations=1, prior_weight=1.0,
+                                                       trial_rechecks=rechecks))
+        _, info = fit_body_shape((seq.depth(i) for i in range(len(seq))), BodyModel.default(1.75),
+                                 seq.camera, fps=seq.fps, settings=settings, fit_scale=False,
+                                 method="hc")
+        assert info["fitted"] and info["start_info"]["heading_check"]["frames"] == 2
+        assert seen and set(seen) == ({1} if rechecks else {0})

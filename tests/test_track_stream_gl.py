@@ -72,7 +72,8 @@ def test_track_stream_yields_each_frame_before_reading_the_next(frames):
 
 def test_tracking_and_the_height_fit_release_every_gl_object(frames):
     from depthtrack.render import gl_context
-    from depthtrack.track import HeightSettings, TrackerSettings, fit_body_height, track_stream
+    from depthtrack.track import (HeadingSettings, HeightSettings, TrackerSettings, fit_body_height,
+                                  track_stream)
 
     body, _, depths = frames
     ctx = gl_context()
@@ -89,7 +90,8 @@ def test_tracking_and_the_height_fit_release_every_gl_object(frames):
         start = _live_gl_objects()
         out = list(track_stream(iter(depths), CAMERA, body=body, method="hc+ep",
                                 segmenter=_segment, detector=lambda d, c, f: [],
-                                settings=TrackerSettings(heading_frames=2)))
+                                settings=TrackerSettings(heading=HeadingSettings(
+                                    frames=2, every=1, recheck_tile=32))))
         assert [f.index for f in out] == [0, 1, 2, 3] and all(f.pose is not None for f in out)
         assert _live_gl_objects() == start
         fitted, info = fit_body_height(depths[0], _segment(depths[0], CAMERA), CAMERA,
@@ -102,6 +104,30 @@ def test_tracking_and_the_height_fit_release_every_gl_object(frames):
     finally:
         _drain(ctx)
         ctx.gc_mode = mode
+
+
+def test_the_rechecks_renderer_scores_the_uploaded_frame_and_belongs_to_the_set(frames):
+    from depthtrack.render import TileRenderer
+    from depthtrack.track.renderers import RendererSet
+
+    body, truth, depths = frames
+    render_body = body.with_mesh("decimated")
+    roi = (30.0, 0.0, 140.0)
+    start = _live_gl_objects()
+    with RendererSet(render_body, CAMERA, tile=64) as renderers, \
+            TileRenderer(render_body, CAMERA, tile=32) as fresh:
+        assert renderers.at_tile(0) is renderers.coarse and renderers.at_tile(64) is renderers.coarse
+        renderers.upload(SimpleNamespace(observed=depths[1], roi=roi))
+        late = renderers.at_tile(32)              # made after the upload: it scores that frame
+        assert late is renderers.at_tile(32) and late.tile == 32
+        for k in (1, 3):
+            if k == 3:                            # and every frame uploaded after it
+                renderers.upload(SimpleNamespace(observed=depths[3], roi=roi))
+            fresh.set_observation(depths[k], roi=roi)
+            costs = late.costs(truth)
+            np.testing.assert_allclose(costs, fresh.costs(truth), rtol=1e-6)
+            assert np.argmin(costs) == k          # the frame's own pose explains it best
+    assert _live_gl_objects() == start
 
 
 def test_renderers_release_on_leaving_with():
