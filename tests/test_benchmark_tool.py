@@ -109,3 +109,44 @@ def test_the_report_names_the_rasteriser(report):
     assert renderer["gl_renderer"] == gl_renderer() and renderer["gl_version"]
     assert report.renderer_label(renderer).startswith(f"GL renderer {gl_renderer()} (")
     assert report.renderer_label(None) == "GL renderer unknown"      # an older report
+
+
+def _report_of(figures):
+    return {"sequences": [{"name": k, "metrics": {"hc+ep": {"within_10cm": v, "fps": 1.0,
+                                                              "wall_fps": 0.5}}}
+                          for k, v in figures.items()]}
+
+
+def test_two_runs_are_compared_sequence_by_sequence(report):
+    base = _report_of({"a": 0.90, "b": 0.50, "c": 0.80, "gone": 0.7})
+    new = _report_of({"a": 0.90, "b": 0.70, "c": 0.70, "added": 0.1})
+    new["sequences"][1]["metrics"]["hc+ep"]["fps"] = 2.0
+    r = report.paired(base, new)
+    assert [row["name"] for row in r["rows"]] == ["a", "b", "c"]
+    d = np.array([0.0, 0.2, -0.1])
+    assert r["n"] == 3 and r["mean_difference"] == pytest.approx(d.mean())
+    assert r["standard_error"] == pytest.approx(d.std(ddof=1) / np.sqrt(3))
+    assert (r["lost"], r["gained"], r["unchanged"]) == (1, 1, 1)
+    assert r["only_base"] == ["gone"] and r["only_new"] == ["added"]
+    assert r["fps_ratio"] == pytest.approx((1 + 2 + 1) / 3) and r["wall_fps_ratio"] == 1.0
+
+
+def test_compare_reports_prints_the_paired_difference_and_refuses_bad_input(tmp_path, capsys):
+    tool = _load("compare_reports")
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    a.write_text(json.dumps(_report_of({"s1": 0.5, "s2": 0.9})))
+    b.write_text(json.dumps(_report_of({"s1": 0.6, "s2": 0.9})))
+    assert tool.main([str(a), str(b)]) == 0
+    out = capsys.readouterr().out
+    assert "mean difference +5.00" in out and "1 unchanged" in out
+    assert tool.main([str(a), str(b), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["mean_difference"] == pytest.approx(0.05)
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    assert tool.main([str(bad), str(b)]) == 2
+    err = capsys.readouterr().err
+    assert str(bad) in err and len(err.strip().splitlines()) == 1
+    assert tool.main([str(a), str(tmp_path / "missing.json")]) == 2
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps(_report_of({"x": 0.5})))
+    assert tool.main([str(a), str(other)]) == 2

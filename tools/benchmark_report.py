@@ -221,3 +221,60 @@ def markdown(report: dict) -> str:
             out.append(s["eval_command"])
     out += ["```", ""]
     return "\n".join(out)
+
+
+def paired(base: dict, new: dict, method: str = "hc+ep", metric: str = "within_10cm",
+           threshold: float = 0.05) -> dict:
+    """Two benchmark reports of the same sequences compared sequence by sequence.
+
+    A setting's effect is the mean of the per-sequence differences ``new - base`` over the
+    sequences both reports hold (same names: same motion, condition and noise seed); its
+    standard error is their standard deviation over the square root of their number. Which
+    attractor a track falls into is decided by small differences, so a few sequences move by
+    tens of points either way: ``lost`` and ``gained`` count the sequences that moved by more
+    than ``threshold`` (in the metric's units), ``unchanged`` those that did not move at all.
+
+    Parameters
+    ----------
+    base, new : dict
+        ``report.json`` of ``tools/benchmark.py``.
+    method : str
+    metric : str
+        A per-sequence metric of ``depthtrack eval --json`` (``within_10cm``, ...).
+    threshold : float
+
+    Returns
+    -------
+    dict
+        ``rows`` (name, base, new, difference; None where a side lacks the metric), ``n``,
+        ``mean_difference``, ``standard_error``, ``lost``, ``gained``, ``unchanged``,
+        ``only_base`` and ``only_new`` (names in one report alone), and for ``fps`` and
+        ``wall_fps`` the mean ratio ``new / base`` (``fps_ratio``, ``wall_fps_ratio``).
+    """
+    def by_name(report):
+        return {s["name"]: s["metrics"].get(method) for s in report["sequences"]}
+
+    b, n = by_name(base), by_name(new)
+    names = [k for k in b if k in n]
+    rows, diffs, ratios = [], [], {"fps": [], "wall_fps": []}
+    for k in names:
+        x = None if b[k] is None else b[k].get(metric)
+        y = None if n[k] is None else n[k].get(metric)
+        d = None if x is None or y is None else float(y) - float(x)
+        rows.append({"name": k, "base": x, "new": y, "difference": d})
+        if d is not None:
+            diffs.append(d)
+        for key, values in ratios.items():
+            if b[k] and n[k] and b[k].get(key) and n[k].get(key):
+                values.append(float(n[k][key]) / float(b[k][key]))
+    d = np.array(diffs, float)
+    out = {"method": method, "metric": metric, "threshold": threshold, "rows": rows,
+           "n": int(len(d)),
+           "mean_difference": float(d.mean()) if len(d) else None,
+           "standard_error": float(d.std(ddof=1) / np.sqrt(len(d))) if len(d) > 1 else None,
+           "lost": int(np.sum(d < -threshold)), "gained": int(np.sum(d > threshold)),
+           "unchanged": int(np.sum(d == 0.0)),
+           "only_base": [k for k in b if k not in n], "only_new": [k for k in n if k not in b]}
+    for key, values in ratios.items():
+        out[f"{key}_ratio"] = float(np.mean(values)) if values else None
+    return out
