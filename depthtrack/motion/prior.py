@@ -69,12 +69,13 @@ def apply_velocity(poses, velocities):
     """
     x = np.asarray(poses, dtype=np.float64)
     v = np.asarray(velocities, dtype=np.float64)
-    x, v = np.broadcast_arrays(x, v)
-    out = np.empty(x.shape)
+    batch = np.broadcast_shapes(x.shape, v.shape)[:-1]
+    out = np.empty(batch + (DOF,))
     out[..., :3] = x[..., :3] + v[..., :3]
-    shape = x.shape[:-1] + (NUM_ROTATIONS, 3)
-    out[..., 3:] = compose_rotvec(x[..., 3:].reshape(shape), v[..., 3:].reshape(shape)).reshape(
-        x.shape[:-1] + (DOF - 3,))
+    # each side converted at its own shape (one pose against many moves: converted once)
+    rotations = compose_rotvec(x[..., 3:].reshape(x.shape[:-1] + (NUM_ROTATIONS, 3)),
+                               v[..., 3:].reshape(v.shape[:-1] + (NUM_ROTATIONS, 3)))
+    out[..., 3:] = rotations.reshape(batch + (DOF - 3,))
     return out
 
 
