@@ -70,10 +70,21 @@ void main() {
             for (int i = 0; i < RUN; ++i) {
                 if (observed[i].x == NO_READING_CODE || c[i] <= NEIGHBOR_PENALTY) continue;
                 vec2 o = observed[i];
-                float n = min(min(min(pair_cost(o, above[i]), pair_cost(o, above[i + 1])),
-                                  min(pair_cost(o, above[i + 2]), pair_cost(o, rendered[i]))),
-                              min(min(pair_cost(o, rendered[i + 2]), pair_cost(o, below[i])),
-                                  min(pair_cost(o, below[i + 1]), pair_cost(o, below[i + 2]))));
+                // pair_cost rises with |observed - rendered| where the model is drawn, so the
+                // neighbours' minimum is one smoothstep of the nearest drawn depth
+                float nb[8] = float[8](above[i], above[i + 1], above[i + 2], rendered[i],
+                                       rendered[i + 2], below[i], below[i + 1], below[i + 2]);
+                float nearest = 3.0e38;
+                bool absent = false;
+                for (int k = 0; k < 8; ++k) {
+                    if (nb[k] <= 0.0) absent = true;
+                    else nearest = min(nearest, abs(o.x - nb[k]));
+                }
+                float n = absent ? o.y : 3.0e38;
+                if (nearest < 3.0e38) {
+                    n = min(n, o.x == BACKGROUND_CODE ? SILHOUETTE_COST
+                                                      : smoothstep(0.0, 1.0, nearest / DEPTH_SCALE));
+                }
                 c[i] = min(c[i], n + NEIGHBOR_PENALTY);
             }
         }
