@@ -180,7 +180,8 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     body : BodyModel
         The fitted body (``body`` itself when too few frames had a person: ``info`` says so).
     info : dict
-        ``fitted`` (bool), ``frames_tracked``, ``frames_used``, ``seconds`` (tracking and
+        ``fitted`` (bool), ``frames_tracked``, ``trial_recoveries`` (the trial's
+        ``recoveries_tried`` and ``recoveries``), ``frames_used``, ``seconds`` (tracking and
         fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
         a pose, ``start_pose``: its pose (48 floats) refined with the fitted body, and
         ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
@@ -213,7 +214,8 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
             stream.close()
         tracked = [(i, x) for i, x in trial if x is not None]
         start = dict(tracker.state.init_info)
-    info = {"fitted": False, "frames_tracked": len(trial)}
+        recoveries = {k: tracker.recorder.counts[k] for k in ("recoveries_tried", "recoveries")}
+    info = {"fitted": False, "frames_tracked": len(trial), "trial_recoveries": recoveries}
     if len(tracked) < s.fit_frames:
         info.update(reason=f"{len(tracked)} of the first {len(trial)} frames got a pose; "
                            f"the fit needs {s.fit_frames}",

@@ -119,7 +119,8 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
         # upside-down body is no less likely there than an upright one)
         y, _, _ = global_search(tracker, energy, frame,
                                 heading=None if doubted else facing_direction(previous),
-                                body_axis=None if doubted else long_axis(previous))
+                                body_axis=None if doubted else long_axis(previous),
+                                legs=tracker.settings.start.legs in ("recovery", "always"))
     except InputError:
         return False, x, cost
     y_cost = unexplained(energy, y)

@@ -29,6 +29,13 @@ from .search import climb
 #: (the right shoulder mirrors rz).
 ARM_POSES = {"relaxed": (0.0, 0.0), "t-pose": (0.0, -1.13), "raised": (0.0, -2.6),
              "overhead": (-1.0, -2.4), "forward": (-1.4, 0.0), "down": (0.0, 0.35)}
+#: Leg poses a recovery's global search also tries (:attr:`StartSettings.legs`), each on
+#: every candidate of the grid: a hip's (pose slot, radians), the leg raised forward or out
+#: to the side. The grid's legs hang down; a kick's raised leg reached the search only
+#: through the recogniser's proposals, whose sides are at chance, and there a wrong-facing
+#: fit won (dev 90_05, a jump kick: README, "The tracker").
+LEG_POSES = {"left forward": ("l_hip_rx", -1.2), "right forward": ("r_hip_rx", -1.2),
+             "left out": ("l_hip_rz", 0.9), "right out": ("r_hip_rz", -0.9)}
 #: Pose slots the arm poses set: both shoulders' rx and rz.
 ARM_SLOTS = [POSE_INDEX[n] for n in ("l_shoulder_rx", "l_shoulder_rz", "r_shoulder_rx",
                                      "r_shoulder_rz")]
@@ -141,6 +148,17 @@ def clearly_facing(pose, facing: str, up, margin_deg: float) -> bool:
     return bool(wrong_side(pose, OTHER_SIDE[facing], up, margin_deg)[0])
 
 
+def with_leg_poses(poses) -> np.ndarray:
+    """``poses (N, 48)`` followed by each of :data:`LEG_POSES` applied to all of them:
+    ``(N * (1 + len(LEG_POSES)), 48)``, the legs' blocks in the dictionary's order."""
+    out = [poses]
+    for slot, angle in LEG_POSES.values():
+        raised = poses.copy()
+        raised[:, POSE_INDEX[slot]] = angle
+        out.append(raised)
+    return np.concatenate(out)
+
+
 def candidate_poses(points, up, centre, render_body, settings):
     """The scored candidates of the global search: ``(poses (N, 48), orientations K)``."""
     g = settings.start
@@ -173,7 +191,7 @@ def candidate_poses(points, up, centre, render_body, settings):
     return np.concatenate(shifted), len(rotations)
 
 
-def global_search(tracker, energy, frame, heading=None, body_axis=None):
+def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bool = False):
     """Find the body in ``frame`` without a previous pose (module docstring).
 
     Parameters
@@ -188,6 +206,8 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
         Last tracked forward direction (recovery), else the body is expected to face the camera.
     body_axis : (3,) float or None
         Last tracked head direction (recovery): the prior prefers it to 'up'.
+    legs : bool
+        Also try every grid candidate with each of :data:`LEG_POSES`.
 
     Returns
     -------
@@ -206,6 +226,9 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
     # the visible surface lies in front of the body's centre: push back along the ray
     centre = centre + g.centre_push * centre / np.linalg.norm(centre)
     poses, n_rot = candidate_poses(points, up, centre, tracker.render_body, tracker.settings)
+    n_legs_down = len(poses)
+    if legs:
+        poses = with_leg_poses(poses)
     n_grid = len(poses)
     p = tracker.settings.propose
     proposals = frame_proposals(tracker, frame)
@@ -270,6 +293,8 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None):
             "chosen_from": "proposals" if i >= n_grid else "grid",
             "chosen_orientation": int(i % n_rot) if i < n_grid else None,
             "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
+            **({"chosen_legs": (["down", *LEG_POSES][i // n_legs_down] if i < n_grid else None)}
+               if legs else {}),
             "finalists": finalists, "facing": told}
     if told != "auto":
         # near profile the told side does not settle front and back: the check then runs

@@ -13,6 +13,8 @@ from .setting_checks import power_of_two as _power_of_two
 
 #: Which way the person faces at the start (:attr:`StartSettings.facing`).
 FACINGS = ("auto", "camera", "away")
+#: Which global searches try raised legs (:attr:`StartSettings.legs`).
+LEG_SEARCHES = ("never", "recovery", "always")
 
 
 @dataclass(frozen=True)
@@ -80,6 +82,14 @@ class StartSettings:
         other eleven dev motions no start waits, so their tracks are unchanged). 0 = off. A
         deferred start says by how many frames in its ``init_info`` (``deferred_frames``;
         ``summary.json``'s ``initialisation_details``).
+    legs : {"never", "recovery", "always"}
+        Which global searches also try every grid candidate with a leg raised
+        (:data:`~.start.LEG_POSES`, five times the grid): a recovery's, or also the start's.
+        The grid's legs hang down, so a person caught mid-kick was found only through the
+        recogniser's proposals (dev 90_05 seed 1, SR4000: the recovery on frame 40 took a
+        fit facing the wrong way, 32 cm mean joint error, whose energy was 88 above a pose
+        fitted to the true joints; with the leg poses the search finds one facing the right
+        way, 8 cm, 41 below). Not yet measured on a benchmark, so "never" by default.
     """
 
     passes: int = 3
@@ -99,6 +109,7 @@ class StartSettings:
     facing_margin: float = 0.0
     complete_fraction: float = 0.7
     complete_frames: int = 10
+    legs: str = "never"
 
     def __post_init__(self):
         _check(0.0 <= self.complete_fraction <= 1.0, f"StartSettings.complete_fraction must "
@@ -107,6 +118,8 @@ class StartSettings:
                                                f"least 1, not {self.complete_frames}")
         _check(self.facing in FACINGS, f"StartSettings.facing must be one of "
                                        f"{', '.join(FACINGS)}, not {self.facing!r}")
+        _check(self.legs in LEG_SEARCHES, f"StartSettings.legs must be one of "
+                                          f"{', '.join(LEG_SEARCHES)}, not {self.legs!r}")
         _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
                   "root_passes", "finalists")
         _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",

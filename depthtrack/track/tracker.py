@@ -205,7 +205,8 @@ class Tracker:
             e = energy.one(x)
             info = {"mode": "given pose"}
         else:
-            x, e, info = global_search(self, energy, frame)
+            x, e, info = global_search(self, energy, frame,
+                                       legs=self.settings.start.legs == "always")
             info = {"mode": "automatic", **info, "energy": float(e)}
         state = state.logged({"energy": e, "cost": unexplained(energy, x)}, pose=x,
                              velocity=np.zeros(self.body.dof), init_info=info,
