@@ -232,3 +232,42 @@ def test_a_person_facing_away_is_found_by_tracking_both_headings():
     assert check["energy_turned"] < check["energy_initial"]
     err = _errors(body, result.poses, truth)
     assert np.median(err) < 0.06                           # facing the camera would swap left and right
+
+
+def test_the_search_with_leg_poses_finds_a_kick_the_grid_alone_misses():
+    """StartSettings.legs: the global search's grid hangs the legs down; a person caught
+    with a leg raised forward (a kick, seen from the side) is found with the leg where it is
+    only when the grid's candidates are also tried with a leg raised (start.LEG_POSES)."""
+    from depthtrack.body.skeleton import POSE_INDEX
+    from depthtrack.contract import JOINT_INDEX
+    from depthtrack.render import FrameRenderer
+    from depthtrack.track.start import LEG_POSES, with_leg_poses
+
+    grid = np.zeros((3, 48))
+    legs = with_leg_poses(grid)
+    assert legs.shape == (3 * (1 + len(LEG_POSES)), 48) and np.all(legs[:3] == 0)
+    for k, (slot, angle) in enumerate(LEG_POSES.values(), start=1):
+        block = legs[3 * k: 3 * (k + 1)]
+        assert np.all(block[:, POSE_INDEX[slot]] == angle)
+        assert np.count_nonzero(block) == 3
+
+    body = BodyModel.default(1.75)
+    truth = np.zeros(48)
+    truth[2] = 3.4
+    truth[4] = np.pi / 2                                   # seen from the side
+    truth[POSE_INDEX["r_hip_rx"]] = -1.35                  # the right leg kicked forward
+    truth[POSE_INDEX["l_knee_rx"]] = 0.15
+    with FrameRenderer(CAMERA) as renderer:
+        depth = renderer.render(body, truth).astype(np.float32)
+    foot = JOINT_INDEX["r_ankle"]
+    errors = {}
+    for legs_setting in ("never", "always"):
+        settings = TrackerSettings(start={"legs": legs_setting}, heading={"frames": 0})
+        with Tracker(body, CAMERA, method="hc", segmenter=_segment, settings=settings) as tracker:
+            x = tracker.init(depth)
+            info = tracker.init_info
+        errors[legs_setting] = float(_errors(body, [x], truth)[0][foot])
+        if legs_setting == "always":
+            assert info["chosen_legs"] in ("down", *LEG_POSES)
+    assert errors["always"] < 0.10, errors
+    assert errors["never"] > 0.2, errors
