@@ -89,7 +89,9 @@ class StartSettings:
         recogniser's proposals (dev 90_05 seed 1, SR4000: the recovery on frame 40 took a
         fit facing the wrong way, 32 cm mean joint error, whose energy was 88 above a pose
         fitted to the true joints; with the leg poses the search finds one facing the right
-        way, 8 cm, 41 below). Not yet measured on a benchmark, so "never" by default.
+        way, 8 cm, 41 below). On dev "recovery" helped the kicks (90_05 seeds 1 and 2, +8
+        and +14 points) and hurt a runner (02_03 seeds 1 and 2, -12 and -22): a stride
+        fits a raised leg too, with the wrong leg (README, "Lost and found"). So "never".
     """
 
     passes: int = 3
