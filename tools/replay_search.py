@@ -1,0 +1,103 @@
+"""A recovery's global search replayed on one frame of a kept track, against the truth.
+
+The search runs as ``judge.recover`` runs it on frame ``F``: on that frame's observation,
+preferring the heading and body axis of the track's pose on frame ``F - 1``, with the
+track's own body (``body.json``), by the energy without the motion prior. Printed for the
+track's pose on ``F - 1`` and on ``F``, the search's result, and a pose fitted to the true
+joints (then climbed): energy, unexplained share, facing against the previous pose (cosine),
+share of joints within 10 cm and mean joint error. A search result whose energy is above the
+truth fit's is a failure of the search, not of the likelihood.
+
+    .venv/bin/python tools/replay_search.py SEQ TRACK F [--legs]
+
+``SEQ``: a synthesized sequence with ``groundtruth/joints.csv``; ``TRACK``: a track of it
+(``depthtrack track`` / ``eval --tracks-out``: ``body.json``, ``poses.npz``); ``--legs``:
+the search also tries raised legs (``StartSettings.legs``). Example (README, "Lost and
+found"): dev 90_05 seed 1, frame 40.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import pathlib
+import sys
+
+import numpy as np
+
+REPO = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from depthtrack.body import BodyModel  # noqa: E402
+from depthtrack.contract import JOINT_NAMES  # noqa: E402
+from depthtrack.errors import InputError  # noqa: E402
+from depthtrack.io import open_sequence  # noqa: E402
+from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.heading import facing_direction, fit_joints, long_axis  # noqa: E402
+from depthtrack.track.judge import unexplained  # noqa: E402
+from depthtrack.track.search import climb  # noqa: E402
+from depthtrack.track.start import global_search  # noqa: E402
+from depthtrack.track.tracker import Tracker  # noqa: E402
+
+
+def true_joints(seq_dir: pathlib.Path, frame: int) -> np.ndarray:
+    """``(15, 3)`` ground-truth joints of ``frame`` (contract order)."""
+    rows = {}
+    with open(seq_dir / "groundtruth" / "joints.csv", newline="") as f:
+        for r in csv.DictReader(f):
+            if int(r["frame"]) == frame:
+                rows[r["joint"]] = [float(r["x"]), float(r["y"]), float(r["z"])]
+    if len(rows) != len(JOINT_NAMES):
+        raise InputError(seq_dir / "groundtruth" / "joints.csv", f"no joints for frame {frame}")
+    return np.array([rows[j] for j in JOINT_NAMES])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog="example:\n  tools/replay_search.py "
+                                            "OUT/dev/sequences/90_05_c0_s1 "
+                                            "OUT/dev/tracks/90_05_c0_s1/hc+ep 40 --legs")
+    parser.add_argument("seq", type=pathlib.Path, help="sequence directory with ground truth")
+    parser.add_argument("track", type=pathlib.Path, help="track directory (body.json, poses.npz)")
+    parser.add_argument("frame", type=int, help="the frame to replay (>= 1)")
+    parser.add_argument("--legs", action="store_true", help="also try raised legs")
+    args = parser.parse_args(argv)
+    try:
+        seq = open_sequence(args.seq)
+        body = BodyModel.from_json(args.track / "body.json")
+        poses = np.load(args.track / "poses.npz")["poses"]
+        if not 1 <= args.frame < len(poses):
+            raise InputError(args.track / "poses.npz", f"frame must be 1..{len(poses) - 1}")
+        truth = true_joints(args.seq, args.frame)
+    except (InputError, OSError, KeyError) as exc:
+        print(f"replay_search: {exc}", file=sys.stderr)
+        return 2
+    f = args.frame
+    previous = poses[f - 1]
+    with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=TrackerSettings()) as tr:
+        state, _, _ = tr.start(tr.state, seq.depth(f - 1), pose=previous)
+        frame, _ = tr._observe(state, seq.depth(f), predicted=previous)
+        energy = tr._energy(frame).without_prior()
+        found, _, info = global_search(tr, energy, frame, heading=facing_direction(previous),
+                                       body_axis=long_axis(previous), legs=args.legs)
+        fitted = fit_joints(body, truth, previous)
+        climbed, _ = climb(energy, tr.climbers.start, fitted, tr.recorder)
+
+        def line(name, pose):
+            err = np.linalg.norm(body.joint_positions(pose) - truth, axis=1)
+            print(f"{name:22s} energy {energy.one(pose):9.1f}  unexplained "
+                  f"{unexplained(energy, pose):.3f}  facing vs previous "
+                  f"{facing_direction(pose) @ facing_direction(previous):+.2f}  within 10 cm "
+                  f"{np.mean(err < 0.1):.2f}  mean error {100 * err.mean():.0f} cm")
+
+        line(f"frame {f - 1}'s pose", previous)
+        line(f"frame {f}'s tracked pose", poses[f])
+        line("search" + (" with legs" if args.legs else ""), found)
+        line("truth fit", fitted)
+        line("truth fit, climbed", climbed)
+        print("finalists:", ", ".join(f"{d['from']} {d['energy']}" for d in info["finalists"]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
