@@ -19,6 +19,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from benchmark_report import paired  # noqa: E402
 
+#: Metrics that are fractions: shown in points, a default threshold of 5 points.
+FRACTIONS = ("within_10cm", "back_to_front_fraction")
+
 
 def _load(path: Path) -> dict:
     try:
@@ -58,8 +61,8 @@ def main(argv=None) -> int:
     except SystemExit as exc:
         print(exc, file=sys.stderr)
         return 2
-    threshold = args.threshold if args.threshold is not None else (
-        0.05 if args.metric in ("within_10cm", "back_to_front_fraction") else 0.0)
+    fraction = args.metric in FRACTIONS
+    threshold = args.threshold if args.threshold is not None else (0.05 if fraction else 0.0)
     result = paired(base, new, args.method, args.metric, threshold)
     if result["n"] == 0:
         print(f"compare_reports: {args.base} and {args.new} share no sequence with "
@@ -68,7 +71,7 @@ def main(argv=None) -> int:
     if args.json:
         print(json.dumps(result, indent=1))
         return 0
-    scale = 100.0 if args.metric in ("within_10cm", "back_to_front_fraction") else 1.0
+    scale = 100.0 if fraction else 1.0
     unit = " (points)" if scale == 100.0 else ""
     print(f"{'sequence':28s} {'base':>7s} {'new':>7s} {'new-base':>9s}")
     for r in result["rows"]:

@@ -18,7 +18,6 @@ found"): dev 90_05 seed 1, frame 40.
 from __future__ import annotations
 
 import argparse
-import csv
 import pathlib
 import sys
 
@@ -28,7 +27,6 @@ REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from depthtrack.body import BodyModel  # noqa: E402
-from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
@@ -37,18 +35,6 @@ from depthtrack.track.judge import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.start import global_search  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
-
-
-def true_joints(seq_dir: pathlib.Path, frame: int) -> np.ndarray:
-    """``(15, 3)`` ground-truth joints of ``frame`` (contract order)."""
-    rows = {}
-    with open(seq_dir / "groundtruth" / "joints.csv", newline="") as f:
-        for r in csv.DictReader(f):
-            if int(r["frame"]) == frame:
-                rows[r["joint"]] = [float(r["x"]), float(r["y"]), float(r["z"])]
-    if len(rows) != len(JOINT_NAMES):
-        raise InputError(seq_dir / "groundtruth" / "joints.csv", f"no joints for frame {frame}")
-    return np.array([rows[j] for j in JOINT_NAMES])
 
 
 def main(argv=None) -> int:
@@ -68,7 +54,9 @@ def main(argv=None) -> int:
         poses = np.load(args.track / "poses.npz")["poses"]
         if not 1 <= args.frame < len(poses):
             raise InputError(args.track / "poses.npz", f"frame must be 1..{len(poses) - 1}")
-        truth = true_joints(args.seq, args.frame)
+        if seq.joints is None:
+            raise InputError(args.seq, "no ground-truth joints (groundtruth/joints.csv)")
+        truth = seq.joints[args.frame]
     except (InputError, OSError, KeyError) as exc:
         print(f"replay_search: {exc}", file=sys.stderr)
         return 2

@@ -293,9 +293,9 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
             "chosen_from": "proposals" if i >= n_grid else "grid",
             "chosen_orientation": int(i % n_rot) if i < n_grid else None,
             "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
-            **({"chosen_legs": (["down", *LEG_POSES][i // n_legs_down] if i < n_grid else None)}
-               if legs else {}),
             "finalists": finalists, "facing": told}
+    if legs:
+        info["chosen_legs"] = ["down", *LEG_POSES][i // n_legs_down] if i < n_grid else None
     if told != "auto":
         # near profile the told side does not settle front and back: the check then runs
         info["facing_clear"] = clearly_facing(x, told, up, g.facing_margin)
