@@ -27,8 +27,10 @@ sysdeps:
 demo: $(STAMP)
 	$(VENV)/bin/depthtrack demo --out demo-output
 
+# -n auto: one pytest worker per core (pytest-xdist), whole files to each, so a file's
+# module fixtures are made once: the suite is mostly single-threaded tracking on llvmpipe.
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n auto --dist loadfile
 
 bench: $(STAMP)
 	$(VENV)/bin/depthtrack bench

@@ -134,14 +134,18 @@ def test_track_settings_option_reaches_the_tracker_and_bad_ones_are_refused(squa
 
     short = tmp_path / "short"
     out = tmp_path / "track"
-    # five frames are enough to see the settings written; no check after the start
+    # five frames are enough to see the settings written; no check after the start, and
+    # neither the height fit nor the shape fit (the height given, the fit off)
     from depthtrack.io.sequence import write_sequence
-    write_sequence(short, [squat.depth(i) for i in range(5)], squat.camera, squat.fps)
-    given = {"heading": {"frames": 0, "every": 8}, "propose": {"lost_frames": 5}}
+    write_sequence(short, [squat.depth(i) for i in range(5)], squat.camera, squat.fps,
+                   subject={"height_m": 1.75})
+    given = {"heading": {"frames": 0, "every": 8}, "propose": {"lost_frames": 5},
+             "shape": {"enabled": False}}
     assert main(["track", str(short), "-o", str(out), "--quiet", "--settings", json.dumps(given)]) == 0
     written = json.loads((out / "summary.json").read_text())["settings"]
     assert written["heading"]["every"] == 8 and written["propose"]["lost_frames"] == 5
     assert written["heading"]["start_twin"] == "swapped"           # the rest stays default
+    assert written["shape"]["enabled"] is False and written["shape"]["frames"] == 16
     # a track's summary.json gives the same settings back
     assert main(["track", str(short), "-o", str(tmp_path / "again"), "--quiet",
                  "--settings", str(out / "summary.json")]) == 0
