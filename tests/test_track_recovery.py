@@ -121,6 +121,31 @@ def test_recheck_switches_after_enough_votes_only():
     assert not switched and changes == {}
 
 
+def test_the_judge_compares_the_climbed_poses_and_the_setting_reaches_it():
+    """With a judge (``HeadingSettings.judge_tile``) the two climbed hypotheses are compared
+    by its energies, not by the climbs': a tie at the climbs' tiles that the finer tiles
+    decide votes, and the judge sees the climbed poses."""
+    s = TrackerSettings()
+    h = s.heading
+    state = TrackingState(log=({},) * h.every, heading_votes=h.votes - 1)
+    twin = lambda pose: pose + 1.0                      # noqa: E731
+    tie = lambda pose: (pose + 0.5, 200.0)              # noqa: E731 (climbing moves the poses)
+    _, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s)
+    assert not switched and changes["heading_votes"] == 0
+    seen = []
+
+    def judge(poses):                                   # the twin (climbed: 1.5) far lower
+        seen.append(np.asarray(poses)[:, 0].tolist())
+        return np.where(np.asarray(poses)[:, 0] > 1.0, 100.0, 200.0)
+
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s, judge=judge)
+    assert seen == [[0.5, 1.5]] and switched and (x == 1.5).all()
+    assert changes["heading_switches"][0]["energy_turned"] == 100.0
+    assert TrackerSettings(heading={"judge_tile": 256}).heading.judge_tile == 256
+    with pytest.raises(ValueError, match="judge_tile"):
+        TrackerSettings(heading={"judge_tile": 100})
+
+
 def test_small_steady_leads_add_up_and_mixed_ones_cancel():
     """The CUSUM: leads below the vote margin switch once their sum passes the threshold;
     leads of either sign (a frontal view) never do."""

@@ -218,7 +218,7 @@ def settle_heading(start, depths, track, turn, settings):
     return state.replace(init_info=info), poses
 
 
-def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings):
+def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings, judge=None):
     """The heading recheck of one frame (module docstring): keep ``pose`` or its turned twin.
 
     Parameters
@@ -237,6 +237,9 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     pixels : float
         The foreground's pixel count (the margin's scale).
     settings : TrackerSettings
+    judge : callable ``(poses (2, 48)) -> (2,)``, optional
+        The energies the two climbed hypotheses are compared by, when not the climbs' own
+        (:attr:`HeadingSettings.judge_tile`: the same energy on finer tiles).
 
     Returns
     -------
@@ -249,9 +252,11 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     h = settings.heading
     if not due(state, h.every):
         return pose, {}, False
-    _, e_pose = refit(pose)
+    kept, e_pose = refit(pose)
     fits = [refit(t) for t in np.asarray(swapped_twin_of(pose)).reshape(-1, len(pose))]
     y, e_twin = min(fits, key=lambda f: float(f[1]))
+    if judge is not None:
+        e_pose, e_twin = (float(e) for e in judge(np.stack([kept, y])))
     lead = (e_pose - float(e_twin)) / max(pixels, 1.0)
     evidence = max(0.0, state.heading_evidence + lead - h.evidence_drift)
     votes = state.heading_votes + 1 if lead > h.recheck_margin else 0

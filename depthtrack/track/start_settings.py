@@ -225,6 +225,15 @@ class HeadingSettings:
     scored at the same tile, and the energy is a mean per pixel times the ROI's area, so the
     margins keep their meaning. Not adopted: at 32 the dev wide preset (seeds 1-2, paired)
     lost 3.3 points, 8 sequences by more than 5 against 1 gained (README, "Speed").
+
+    ``judge_tile``: the tile side (pixels) at which the front/back recheck compares the
+    tracked pose and its twin once both are climbed (0 = the climbs' own tile, no second
+    render). A body's front and back differ in centimetre-sized shapes (toes, face, chest
+    against buttocks) that a 64-pixel tile of a whole person blurs: on a dev track held back
+    to front (overhead, Azure NFOV from 240 degrees, seed 1) the twin, climbed, led by 0.2
+    to 3.4 % on 64-pixel tiles, under the recheck's margins, and by 1.9 to 5.1 % on 256-pixel
+    tiles; on a track facing the right way the twin trailed by more on the finer tiles too
+    (README, "Front or back at a finer tile"). Two renders per recheck.
     """
 
     frames: int = 10
@@ -248,6 +257,7 @@ class HeadingSettings:
     refit_level: int = 0
     twin_climbs: int = 1
     recheck_tile: int = 0
+    judge_tile: int = 0
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -259,6 +269,7 @@ class HeadingSettings:
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", allow_zero=True)
         _positive(self, "votes", "twin_passes")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
+        _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
                f"HeadingSettings.twin_starts must be a non-empty choice of "
