@@ -91,7 +91,7 @@ def test_tracking_and_the_height_fit_release_every_gl_object(frames):
         out = list(track_stream(iter(depths), CAMERA, body=body, method="hc+ep",
                                 segmenter=_segment, detector=lambda d, c, f: [],
                                 settings=TrackerSettings(heading=HeadingSettings(
-                                    frames=2, every=1, recheck_tile=32))))
+                                    frames=2, every=1, recheck_tile=32, judge_tile=256))))
         assert [f.index for f in out] == [0, 1, 2, 3] and all(f.pose is not None for f in out)
         assert _live_gl_objects() == start
         fitted, info = fit_body_height(depths[0], _segment(depths[0], CAMERA), CAMERA,
