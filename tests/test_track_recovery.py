@@ -98,6 +98,36 @@ def test_the_start_check_keeps_the_heading_its_score_prefers():
         TrackerSettings(heading={"start_by": "votes"})
 
 
+def test_a_close_start_check_is_decided_on_the_finer_tiles_when_asked():
+    """``judge_start``: an ambiguous check (unexplained shares within 10 %) keeps the track
+    whose energy on the judge's tiles is lower; a clear one stays with its own score."""
+    start = TrackingState(pose=np.zeros(48), log=({},))
+    scores = {0.0: {"unexplained": 0.110, "energy": 1.20, "judged": 1.50},
+              1.0: {"unexplained": 0.107, "energy": 1.24, "judged": 1.40}}
+
+    def track(state, frames, table=scores):
+        return state, np.tile(state.pose, (len(frames), 1)), table[float(state.pose[0])]
+
+    turn = lambda pose: pose + 1.0                       # noqa: E731
+    judged = TrackerSettings(heading={"judge_tile": 256, "judge_start": True})
+    state, poses = settle_heading(start, [None] * 3, track, turn, judged)
+    check = state.init_info["heading_check"]
+    assert check["kept"] == "turned" and (poses == 1.0).all() and check["decided_by"] == "judge"
+    assert (check["judged_initial"], check["judged_turned"]) == (1.5, 1.4)
+    # without judge_start (no "judged" score) the close call keeps the initial heading
+    plain = {k: {n: v for n, v in sc.items() if n != "judged"} for k, sc in scores.items()}
+    state, _ = settle_heading(start, [None] * 3, lambda st, f: track(st, f, plain), turn, judged)
+    assert state.init_info["heading_check"]["kept"] == "initial"
+    assert "decided_by" not in state.init_info["heading_check"]
+    # a clear call is not re-decided: the turned twin 20 % better, the judge the other way
+    clear = {0.0: {"unexplained": 0.20, "energy": 1.2, "judged": 1.0},
+             1.0: {"unexplained": 0.10, "energy": 1.3, "judged": 2.0}}
+    state, _ = settle_heading(start, [None] * 3, lambda st, f: track(st, f, clear), turn, judged)
+    assert state.init_info["heading_check"]["kept"] == "turned"
+    with pytest.raises(ValueError, match="judge_start"):
+        TrackerSettings(heading={"judge_start": "yes"})
+
+
 def test_recheck_switches_after_enough_votes_only():
     s = TrackerSettings()
     h = s.heading

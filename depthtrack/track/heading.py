@@ -197,24 +197,31 @@ def settle_heading(start, depths, track, turn, settings):
     b = None if x_turned is None else track(start.replace(pose=x_turned), depths)
     score_b = None if b is None else b[2]
     margin = h.margin if h.start_by == "unexplained" else h.energy_margin
-    if b is not None and score_b[h.start_by] < (1.0 - margin) * score_a[h.start_by]:
+    # a close call either way: the kept heading's score within the margin of the other's
+    ambiguous = b is not None and abs(score_b[h.start_by] - score_a[h.start_by]) < \
+        margin * max(score_a[h.start_by], score_b[h.start_by])
+    # a close call settled on finer tiles (HeadingSettings.judge_start): the lower wins
+    judged = ambiguous and "judged" in score_a and "judged" in score_b
+    if judged:
+        turned = score_b["judged"] < score_a["judged"]
+    else:
+        turned = b is not None and score_b[h.start_by] < (1.0 - margin) * score_a[h.start_by]
+    if turned:
         choice, state, poses = "turned", b[0], np.concatenate([x_turned[None], b[1]])
     else:
         choice, state, poses = "initial", state_a, np.concatenate([x_front[None], track_a])
 
     def rounded(score, key):
-        return None if score is None else round(score[key], 4)
-
-    # a close call either way: the kept heading's score within the margin of the other's
-    ambiguous = b is not None and abs(score_b[h.start_by] - score_a[h.start_by]) < \
-        margin * max(score_a[h.start_by], score_b[h.start_by])
+        return None if score is None or key not in score else round(score[key], 4)
     info = {**state.init_info, "heading_check": {
         "frames": len(depths), "by": h.start_by,
         "unexplained_initial": rounded(score_a, "unexplained"),
         "unexplained_turned": rounded(score_b, "unexplained"),
         "energy_initial": rounded(score_a, "energy"),
         "energy_turned": rounded(score_b, "energy"), "kept": choice,
-        "ambiguous": bool(ambiguous), "turned_ruled_out": x_turned is None}}
+        "ambiguous": bool(ambiguous), "turned_ruled_out": x_turned is None,
+        **({"judged_initial": rounded(score_a, "judged"), "judged_turned": rounded(score_b, "judged"),
+            "decided_by": "judge"} if judged else {})}}
     return state.replace(init_info=info), poses
 
 

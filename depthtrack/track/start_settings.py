@@ -234,6 +234,11 @@ class HeadingSettings:
     to 3.4 % on 64-pixel tiles, under the recheck's margins, and by 1.9 to 5.1 % on 256-pixel
     tiles; on a track facing the right way the twin trailed by more on the finer tiles too
     (README, "Front or back at a finer tile"). Two renders per recheck.
+
+    ``judge_start``: with ``judge_tile``, a start check whose two tracks came out within the
+    margin of each other (``heading_check.ambiguous``) is decided by their mean energy per
+    pixel on ``judge_tile`` tiles, the lower kept (``heading_check.decided_by = "judge"``),
+    instead of keeping the initial heading. One render per checked frame and track.
     """
 
     frames: int = 10
@@ -258,6 +263,7 @@ class HeadingSettings:
     twin_climbs: int = 1
     recheck_tile: int = 0
     judge_tile: int = 0
+    judge_start: bool = False
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -270,6 +276,8 @@ class HeadingSettings:
         _positive(self, "votes", "twin_passes")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
+        _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
+                                                   f"or false, not {self.judge_start!r}")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
                f"HeadingSettings.twin_starts must be a non-empty choice of "

@@ -226,10 +226,11 @@ class Tracker:
         return state, x
 
     def _advance(self, state, depth, score: bool = False):
-        """:meth:`advance`, plus (with ``score``) the frame's energy without the motion prior
-        per foreground pixel at the tracked pose, else None (None too when the track was
-        dropped): what the start's front/back check compares
-        (:func:`.heading.settle_heading`)."""
+        """:meth:`advance`, plus (with ``score``) the frame's scores at the tracked pose, else
+        None (None too when the track was dropped): what the start's front/back check compares
+        (:func:`.heading.settle_heading`). ``{"energy": the energy without the motion prior
+        per foreground pixel}``, and ``"judged"``, the same on :attr:`HeadingSettings.
+        judge_tile` tiles, with :attr:`HeadingSettings.judge_start`."""
         if state.pose is None:
             raise RuntimeError("call init(depth0) before step()")
         depth = as_depth(depth, self.camera)
@@ -279,7 +280,12 @@ class Tracker:
         if not score:
             return state, x.copy(), None
         pixels = max(float(np.count_nonzero(frame.foreground.mask)), 1.0)
-        return state, x.copy(), energy.without_prior().one(x) / pixels
+        bare = energy.without_prior()
+        scores = {"energy": bare.one(x) / pixels}
+        h = s.heading
+        if h.judge_start and h.judge_tile:
+            scores["judged"] = bare.on(self.renderers.at_tile(h.judge_tile)).one(x) / pixels
+        return state, x.copy(), scores
 
     def _rechecks(self, state, energy, frame, x):
         """The rechecks of a frame (no motion prior, tiles of
@@ -360,17 +366,18 @@ class Tracker:
         """``advance`` through ``depths``; ``(state, poses (K, 48), scores)``, or None when
         the track is dropped on the way. ``scores``: the means over the frames of the
         unexplained share (``"unexplained"``) and of the energy without the motion prior
-        per foreground pixel (``"energy"``)."""
-        out, energies = [], []
+        per foreground pixel (``"energy"``; and ``"judged"``, the same on tiles of
+        :attr:`HeadingSettings.judge_tile` pixels, with :attr:`HeadingSettings.judge_start`)."""
+        out, scores = [], []
         for d in depths:
             state, x, e = self._advance(state, d, score=True)
             if x is None:
                 return None
             out.append(x)
-            energies.append(e)
+            scores.append(e)
         costs = [f["cost"] for f in state.log[-len(depths):]]
         return state, np.array(out), {"unexplained": float(np.mean(costs)),
-                                      "energy": float(np.mean(energies))}
+                                      **{k: float(np.mean([e[k] for e in scores])) for k in scores[0]}}
 
     def turned_start(self, frame):
         """The turned twin of a pose, climbed on the start ``frame`` (re-uploaded); None

@@ -1,0 +1,98 @@
+"""Front or back, scored at several tile sides: a kept track's pose against its twin facing
+the other way and against a pose fitted to the true joints.
+
+On each frame ``F`` given, as the front/back recheck does it (``heading.recheck_heading``):
+the track's pose and its swapped twins (``HeadingSettings.twin_starts``) are climbed on the
+frame by the energy without the motion prior, on the tracker's tiles, and the lower twin
+competes; a pose fitted to the true joints is climbed alike. Each is then scored on tiles of
+64, 128 and 256 pixels: printed, the twin's and the truth fit's energy relative to the
+track's (negative = lower, the better explanation) and each one's unexplained share. A lead
+the recheck's margins do not see on the tracker's tiles may show on finer ones
+(``HeadingSettings.judge_tile``; README, "Front or back at a finer tile").
+
+    .venv/bin/python tools/heading_tiles.py SEQ TRACK F[,F...]
+
+``SEQ``: a synthesized sequence with ``groundtruth/joints.csv``; ``TRACK``: a track of it
+(``depthtrack track`` / ``eval --tracks-out``: ``body.json``, ``poses.npz``).
+"""
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+
+import numpy as np
+
+REPO = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from depthtrack.body import BodyModel  # noqa: E402
+from depthtrack.errors import InputError  # noqa: E402
+from depthtrack.io import open_sequence  # noqa: E402
+from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.heading import facing_direction, fit_joints, swapped_twins  # noqa: E402
+from depthtrack.track.judge import unexplained  # noqa: E402
+from depthtrack.track.search import climb  # noqa: E402
+from depthtrack.track.tracker import Tracker  # noqa: E402
+
+TILES = (64, 128, 256)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog="example:\n  tools/heading_tiles.py "
+                                            "OUT/dev/sequences/overhead_c2_s1 "
+                                            "OUT/dev/tracks/overhead_c2_s1/hc+ep 5,15,25,35,45")
+    parser.add_argument("seq", type=pathlib.Path, help="sequence directory with ground truth")
+    parser.add_argument("track", type=pathlib.Path, help="track directory (body.json, poses.npz)")
+    parser.add_argument("frames", help="comma-separated frames (>= 1)")
+    args = parser.parse_args(argv)
+    try:
+        seq = open_sequence(args.seq)
+        body = BodyModel.from_json(args.track / "body.json")
+        poses = np.load(args.track / "poses.npz")["poses"]
+        try:
+            frames = [int(f) for f in args.frames.split(",")]
+        except ValueError:
+            raise InputError(None, f"frames must be comma-separated integers, not {args.frames!r}")
+        if not all(1 <= f < len(poses) for f in frames):
+            raise InputError(args.track / "poses.npz", f"frames must be 1..{len(poses) - 1}")
+        if seq.joints is None:
+            raise InputError(args.seq, "no ground-truth joints (groundtruth/joints.csv)")
+    except (InputError, OSError, KeyError) as exc:
+        print(f"heading_tiles: {exc}", file=sys.stderr)
+        return 2
+    settings = TrackerSettings()
+    with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=settings) as tr:
+        for f in frames:
+            truth = seq.joints[f]
+            state, _, _ = tr.start(tr.state, seq.depth(f - 1), pose=poses[f - 1])
+            frame, _ = tr._observe(state, seq.depth(f), predicted=poses[f - 1])
+            energy = tr._energy(frame).without_prior()
+
+            def climbed(pose):
+                return climb(energy, tr.climbers.start, pose, tr.recorder)[0]
+
+            kept = climbed(poses[f])
+            twin = min((climbed(t) for t in swapped_twins(body, kept, settings.heading.twin_starts)),
+                       key=energy.one)
+            fitted = climbed(fit_joints(body, truth, kept))
+
+            def error(pose):
+                return 100 * np.linalg.norm(body.joint_positions(pose) - truth, axis=1).mean()
+
+            print(f"frame {f}: mean joint error (cm) track {error(kept):.0f}, twin "
+                  f"{error(twin):.0f}, truth fit {error(fitted):.0f}; the twin faces the track's "
+                  f"way by {facing_direction(twin) @ facing_direction(kept):+.2f} (cosine)")
+            for tile in TILES:
+                e = energy.on(tr.renderers.at_tile(tile))
+                ek, et, ef = e(np.stack([kept, twin, fitted]))
+                print(f"  {tile:3d} px tiles: twin {et / ek - 1:+.3f}, truth fit {ef / ek - 1:+.3f}"
+                      f" of the track's energy; unexplained track {unexplained(e, kept):.3f}, "
+                      f"twin {unexplained(e, twin):.3f}, truth fit {unexplained(e, fitted):.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
