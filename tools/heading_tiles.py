@@ -17,7 +17,6 @@ the recheck's margins do not see on the tracker's tiles may show on finer ones
 """
 from __future__ import annotations
 
-import argparse
 import pathlib
 import sys
 
@@ -25,41 +24,30 @@ import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tools"))
 
-from depthtrack.body import BodyModel  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
-from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
 from depthtrack.track.heading import facing_direction, fit_joints, swapped_twins  # noqa: E402
 from depthtrack.track.judge import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
+from track_replay import frame_energy, read_track, track_parser  # noqa: E402
 
 TILES = (64, 128, 256)
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog="example:\n  tools/heading_tiles.py "
-                                            "OUT/dev/sequences/overhead_c2_s1 "
-                                            "OUT/dev/tracks/overhead_c2_s1/hc+ep 5,15,25,35,45")
-    parser.add_argument("seq", type=pathlib.Path, help="sequence directory with ground truth")
-    parser.add_argument("track", type=pathlib.Path, help="track directory (body.json, poses.npz)")
+    parser = track_parser(__doc__, "tools/heading_tiles.py OUT/dev/sequences/overhead_c2_s1 "
+                                   "OUT/dev/tracks/overhead_c2_s1/hc+ep 5,15,25,35,45")
     parser.add_argument("frames", help="comma-separated frames (>= 1)")
     args = parser.parse_args(argv)
     try:
-        seq = open_sequence(args.seq)
-        body = BodyModel.from_json(args.track / "body.json")
-        poses = np.load(args.track / "poses.npz")["poses"]
         try:
             frames = [int(f) for f in args.frames.split(",")]
         except ValueError:
             raise InputError(None, f"frames must be comma-separated integers, not {args.frames!r}")
-        if not all(1 <= f < len(poses) for f in frames):
-            raise InputError(args.track / "poses.npz", f"frames must be 1..{len(poses) - 1}")
-        if seq.joints is None:
-            raise InputError(args.seq, "no ground-truth joints (groundtruth/joints.csv)")
+        seq, body, poses = read_track(args.seq, args.track, frames)
     except (InputError, OSError, KeyError) as exc:
         print(f"heading_tiles: {exc}", file=sys.stderr)
         return 2
@@ -67,9 +55,7 @@ def main(argv=None) -> int:
     with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=settings) as tr:
         for f in frames:
             truth = seq.joints[f]
-            state, _, _ = tr.start(tr.state, seq.depth(f - 1), pose=poses[f - 1])
-            frame, _ = tr._observe(state, seq.depth(f), predicted=poses[f - 1])
-            energy = tr._energy(frame).without_prior()
+            _, energy = frame_energy(tr, seq, poses, f)
 
             def climbed(pose):
                 return climb(energy, tr.climbers.start, pose, tr.recorder)[0]

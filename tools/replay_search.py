@@ -17,7 +17,6 @@ found"): dev 90_05 seed 1, frame 40.
 """
 from __future__ import annotations
 
-import argparse
 import pathlib
 import sys
 
@@ -25,47 +24,34 @@ import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tools"))
 
-from depthtrack.body import BodyModel  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
-from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
 from depthtrack.track.heading import facing_direction, fit_joints, long_axis  # noqa: E402
 from depthtrack.track.judge import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.start import global_search  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
+from track_replay import frame_energy, read_track, track_parser  # noqa: E402
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog="example:\n  tools/replay_search.py "
-                                            "OUT/dev/sequences/90_05_c0_s1 "
-                                            "OUT/dev/tracks/90_05_c0_s1/hc+ep 40 --legs")
-    parser.add_argument("seq", type=pathlib.Path, help="sequence directory with ground truth")
-    parser.add_argument("track", type=pathlib.Path, help="track directory (body.json, poses.npz)")
+    parser = track_parser(__doc__, "tools/replay_search.py OUT/dev/sequences/90_05_c0_s1 "
+                                   "OUT/dev/tracks/90_05_c0_s1/hc+ep 40 --legs")
     parser.add_argument("frame", type=int, help="the frame to replay (>= 1)")
     parser.add_argument("--legs", action="store_true", help="also try raised legs")
     args = parser.parse_args(argv)
     try:
-        seq = open_sequence(args.seq)
-        body = BodyModel.from_json(args.track / "body.json")
-        poses = np.load(args.track / "poses.npz")["poses"]
-        if not 1 <= args.frame < len(poses):
-            raise InputError(args.track / "poses.npz", f"frame must be 1..{len(poses) - 1}")
-        if seq.joints is None:
-            raise InputError(args.seq, "no ground-truth joints (groundtruth/joints.csv)")
-        truth = seq.joints[args.frame]
+        seq, body, poses = read_track(args.seq, args.track, [args.frame])
     except (InputError, OSError, KeyError) as exc:
         print(f"replay_search: {exc}", file=sys.stderr)
         return 2
     f = args.frame
+    truth = seq.joints[f]
     previous = poses[f - 1]
     with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=TrackerSettings()) as tr:
-        state, _, _ = tr.start(tr.state, seq.depth(f - 1), pose=previous)
-        frame, _ = tr._observe(state, seq.depth(f), predicted=previous)
-        energy = tr._energy(frame).without_prior()
+        frame, energy = frame_energy(tr, seq, poses, f)
         found, _, info = global_search(tr, energy, frame, heading=facing_direction(previous),
                                        body_axis=long_axis(previous), legs=args.legs)
         fitted = fit_joints(body, truth, previous)
