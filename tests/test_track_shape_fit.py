@@ -188,9 +188,9 @@ def test_the_trial_without_rechecks_still_checks_its_start(shaped_sequence, monk
     seen = []
     original = tracker_module.recheck_heading
 
-    def recorded(state, pose, refit, twins, pixels, settings):
+    def recorded(state, pose, refit, twins, pixels, settings, **given):
         seen.append(settings.heading.every)
-        return original(state, pose, refit, twins, pixels, settings)
+        return original(state, pose, refit, twins, pixels, settings, **given)
 
     monkeypatch.setattr(tracker_module, "recheck_heading", recorded)
     settings = TrackerSettings(heading={"frames": 2, "every": 1}, start={"complete_fraction": 0.0},
