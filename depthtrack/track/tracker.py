@@ -310,11 +310,12 @@ class Tracker:
 
         pixels = float(np.count_nonzero(frame.foreground.mask))
         judge_tile = self.settings.heading.judge_tile
-        judge = None if not judge_tile else \
-            energy.without_prior().on(self.renderers.at_tile(judge_tile))
+
+        def judge(poses):                    # asked for only where the recheck runs
+            return energy.without_prior().on(self.renderers.at_tile(judge_tile))(poses)
         with self.recorder.timed("heading"):
             y, changes, turned = recheck_heading(state, x, refit, lambda pose: self._recheck_twins(
-                bare, pose), pixels, self.settings, judge=judge)
+                bare, pose), pixels, self.settings, judge=judge if judge_tile else None)
             if turned:
                 return y, changes, "heading"
             y, more, swapped = recheck_limb_sides(
