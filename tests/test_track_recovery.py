@@ -16,6 +16,7 @@ from depthtrack.track.heading import (LEGS_SWAPPED, SIDES_SWAPPED, facing_direct
                                       search_switch, settle_heading, sort_by_heading, swapped_twin,
                                       swapped_twins, turned_pose)
 from depthtrack.track.judge import judge_frame
+from depthtrack.track.rechecks import heading_twins, recheck_twins
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
@@ -476,9 +477,9 @@ def test_the_recheck_climbs_only_the_twin_fits_lowest_before_climbing(squat):
         return np.linalg.norm(joints - target, axis=-1).mean(axis=-1)
 
     for k, want in ((0, 2), (1, 1), (2, 2)):
-        with Tracker(body, squat.camera, settings=TrackerSettings(heading={"twin_climbs": k})) as tracker:
-            twins = tracker._twins(x)
-            picked = tracker._recheck_twins(energy, x)
+        settings = TrackerSettings(heading={"twin_climbs": k})
+        twins = heading_twins(body, settings, x)
+        picked = recheck_twins(body, settings, energy, x)
         assert len(twins) == 2 and picked.shape == (want, 48)
         if want == 1:
             np.testing.assert_array_equal(picked[0], twins[int(np.argmin(energy(twins)))])

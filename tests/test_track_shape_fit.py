@@ -181,18 +181,18 @@ def test_the_trial_without_rechecks_still_checks_its_start(shaped_sequence, monk
     """ShapeSettings.trial_rechecks=False: the trial tracks with every recheck off (each
     frame's heading recheck sees every=0) and its start's front/back check still runs."""
     from depthtrack.track import ShapeSettings, TrackerSettings
-    from depthtrack.track import tracker as tracker_module
+    from depthtrack.track import rechecks as rechecks_module
     from depthtrack.track.height import fit_body_shape
 
     seq, _ = shaped_sequence
     seen = []
-    original = tracker_module.recheck_heading
+    original = rechecks_module.recheck_heading
 
     def recorded(state, pose, refit, twins, pixels, settings, **given):
         seen.append(settings.heading.every)
         return original(state, pose, refit, twins, pixels, settings, **given)
 
-    monkeypatch.setattr(tracker_module, "recheck_heading", recorded)
+    monkeypatch.setattr(rechecks_module, "recheck_heading", recorded)
     settings = TrackerSettings(heading={"frames": 2, "every": 1}, start={"complete_fraction": 0.0},
                                shape=ShapeSettings(frames=3, fit_frames=2, rounds=1,
                                                    max_iterations=1, prior_weight=1.0,

@@ -3,7 +3,8 @@
 One frame (:meth:`Tracker.advance`)::
 
     observe (observe.py) -> predict, search (search.py) -> associate and propagate
-    (propagate.py) -> polish (search.py) -> judge, recover (judge.py)
+    (propagate.py) -> polish (search.py) -> recheck (rechecks.py) -> judge, recover
+    (judge.py)
 
 and a start (:meth:`Tracker.start`): observe -> global search (start.py), then the
 front/back check (heading.py). A state goes in and a new one comes out; the stages read the
@@ -42,18 +43,15 @@ from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy
 from .evidence import PartModel
-from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
-                      recheck_limb_sides, swapped_twins, turned_pose)
-from .proposals import frame_proposals
-from .reach import reach_candidates, recheck_reach
 from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
+from .rechecks import recheck_stage, turned_start
 from .record import Recorder
 from .renderers import RendererSet
-from .search import Climbers, climb, polish, predict, search
+from .search import Climbers, polish, predict, search
 from .settings import TrackerSettings
-from .start import global_search, start_up, wrong_side
+from .start import global_search
 from .state import TrackingState, TrackResult
 
 METHODS = ("hc", "ep", "hc+ep")
@@ -254,7 +252,7 @@ class Tracker:
                 x, e = polish(energy, self.renderers.fine, self.climbers, s, self.recorder, x)
         switched = None
         if self.method != "ep":
-            x, changes, switched = self._rechecks(state, energy, frame, x)
+            x, changes, switched = recheck_stage(self, state, energy, frame, x)
             state = state.replace(**changes)
             if switched:
                 e = energy.one(x)
@@ -287,82 +285,6 @@ class Tracker:
             scores["judged"] = bare.on(self.renderers.at_tile(h.judge_tile)).one(x) / pixels
         return state, x.copy(), scores
 
-    def _rechecks(self, state, energy, frame, x):
-        """The rechecks of a frame (no motion prior, tiles of
-        :attr:`HeadingSettings.recheck_tile` pixels), each where due:
-        :func:`.heading.recheck_heading`, then :func:`.heading.recheck_limb_sides`, then with
-        the recogniser :func:`.reach.recheck_reach`, then :func:`.heading.recheck_by_search`;
-        the first that replaces the pose ends them.
-
-        Returns ``(pose, state changes, switched)``: ``switched`` is None, or which recheck
-        replaced the pose (``"heading"``, ``"limbs"``, ``"reach"``, ``"search"``).
-        """
-        bare = energy.without_prior().on(self.renderers.at_tile(self.settings.heading.recheck_tile))
-        fitted = {}                          # the tracked pose is climbed once for every recheck
-
-        def refit(pose):
-            key = np.asarray(pose, dtype=np.float64).tobytes()
-            if key not in fitted:
-                fitted[key] = climb(bare, self.climbers.start, pose, self.recorder,
-                                    passes=self.settings.heading.twin_passes,
-                                    level_offset=self.settings.heading.refit_level)
-            return fitted[key]
-
-        pixels = float(np.count_nonzero(frame.foreground.mask))
-        judge_tile = self.settings.heading.judge_tile
-
-        def judge(poses):                    # asked for only where the recheck runs
-            return energy.without_prior().on(self.renderers.at_tile(judge_tile))(poses)
-        with self.recorder.timed("heading"):
-            y, changes, turned = recheck_heading(state, x, refit, lambda pose: self._recheck_twins(
-                bare, pose), pixels, self.settings, judge=judge if judge_tile else None)
-            if turned:
-                return y, changes, "heading"
-            y, more, swapped = recheck_limb_sides(
-                state, x, refit, lambda pose: limb_swapped_twins(self.body, pose), self.settings)
-            if swapped:
-                return y, {**changes, **more}, "limbs"
-        if self.forest is not None:
-            with self.recorder.timed("reach"):
-                y, more, reached = recheck_reach(
-                    state, x, refit, bare, lambda pose: reach_candidates(
-                        self.body, pose, frame_proposals(self, frame),
-                        self.settings.propose.min_confidence), self.settings)
-            if reached:
-                return y, {**changes, **more}, "reach"
-        if not due(state, self.settings.heading.search_every):
-            return x, changes, None
-        with self.recorder.timed("heading"):
-            _, e_x = refit(x)
-            taken, more = recheck_by_search(state, x, e_x, self._flip_searcher(bare, frame),
-                                            pixels, self.settings)
-        if taken is None:
-            return x, changes, None
-        return taken, {**changes, **more}, "search"
-
-    def _twins(self, pose):
-        """The swapped twins of ``pose (48,)`` the heading checks climb, ``(K, 48)``
-        (:attr:`HeadingSettings.twin_starts`)."""
-        return swapped_twins(self.body, pose, self.settings.heading.twin_starts)
-
-    def _recheck_twins(self, energy, pose):
-        """The twins of ``pose (48,)`` the heading recheck climbs, ``(k, 48)``: with
-        :attr:`HeadingSettings.twin_climbs` ``k > 0``, the ``k`` of :meth:`_twins` with the
-        lowest unclimbed ``energy`` (one batch); else all of them."""
-        twins = self._twins(pose)
-        k = self.settings.heading.twin_climbs
-        if k <= 0 or k >= len(twins):
-            return twins
-        return twins[np.argsort(energy(twins), kind="stable")[:k]]
-
-    def _flip_searcher(self, energy, frame):
-        """``(heading, body_axis) -> (pose, energy)``: the global search on ``frame`` with
-        those priors (:func:`.heading.flip_search`)."""
-        def run(heading, body_axis):
-            x, e, _ = global_search(self, energy, frame, heading=heading, body_axis=body_axis)
-            return x, e
-        return run
-
     def track_through(self, state, depths):
         """``advance`` through ``depths``; ``(state, poses (K, 48), scores)``, or None when
         the track is dropped on the way. ``scores``: the means over the frames of the
@@ -381,26 +303,8 @@ class Tracker:
                                       **{k: float(np.mean([e[k] for e in scores])) for k in scores[0]}}
 
     def turned_start(self, frame):
-        """The turned twin of a pose, climbed on the start ``frame`` (re-uploaded); None
-        where it faces the other side than the user's :attr:`StartSettings.facing` by more
-        than ``facing_margin``."""
-        g = self.settings.start
-
-        def turn(pose):
-            self.renderers.upload(frame)
-            energy = self._energy(frame)
-            kind = self.settings.heading.start_twin
-            if kind == "search":
-                x, _ = flip_search(self._flip_searcher(energy, frame), pose)
-            else:
-                twins = self._twins(pose) if kind == "swapped" else [turned_pose(pose)]
-                fits = [climb(energy, self.climbers.start, t, self.recorder, passes=g.passes)
-                        for t in twins]
-                x = min(fits, key=lambda f: float(f[1]))[0]
-            if x is None or wrong_side(x, g.facing, start_up(frame.foreground), g.facing_margin)[0]:
-                return None
-            return x
-        return turn
+        """:func:`.rechecks.turned_start` on the start ``frame``."""
+        return turned_start(self, frame)
 
     # ------------------------------------------------------------------ the classic interface
     def init(self, depth0, pose=None, foreground=None):

@@ -1,0 +1,128 @@
+"""Stage "recheck": whether the tracked pose faces the right way, has its limbs on the
+right sides and reaches where the recogniser sees the parts, each where due; and the
+turned twin the start's front/back check tracks (:func:`turned_start`).
+
+The decisions are pure functions in :mod:`.heading` and :mod:`.reach`; this module hands
+them the tracker's climbers, renderers and body. Every recheck scores without the motion
+prior (a switch breaks the motion) on tiles of :attr:`HeadingSettings.recheck_tile`
+pixels; the front/back recheck judges its two climbed poses on
+:attr:`HeadingSettings.judge_tile` tiles.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
+                      recheck_limb_sides, swapped_twins, turned_pose)
+from .proposals import frame_proposals
+from .reach import reach_candidates, recheck_reach
+from .search import climb
+from .start import global_search, start_up, wrong_side
+
+
+def recheck_stage(tracker, state, energy, frame, x):
+    """The rechecks of a frame, each where due: :func:`.heading.recheck_heading`, then
+    :func:`.heading.recheck_limb_sides`, then with the recogniser
+    :func:`.reach.recheck_reach`, then :func:`.heading.recheck_by_search`; the first that
+    replaces the pose ends them.
+
+    ``energy``: the frame's energy (its prior is dropped here); ``x (48,)``: the tracked pose.
+
+    Returns ``(pose (48,), state changes, switched)``: ``switched`` is None, or which
+    recheck replaced the pose (``"heading"``, ``"limbs"``, ``"reach"``, ``"search"``).
+    """
+    s, recorder = tracker.settings, tracker.recorder
+    bare = energy.without_prior().on(tracker.renderers.at_tile(s.heading.recheck_tile))
+    fitted = {}                          # the tracked pose is climbed once for every recheck
+
+    def refit(pose):
+        key = np.asarray(pose, dtype=np.float64).tobytes()
+        if key not in fitted:
+            fitted[key] = climb(bare, tracker.climbers.start, pose, recorder,
+                                passes=s.heading.twin_passes, level_offset=s.heading.refit_level)
+        return fitted[key]
+
+    pixels = float(np.count_nonzero(frame.foreground.mask))
+    judge_tile = s.heading.judge_tile
+
+    def judge(poses):                    # asked for only where the recheck runs
+        return energy.without_prior().on(tracker.renderers.at_tile(judge_tile))(poses)
+    with recorder.timed("heading"):
+        y, changes, turned = recheck_heading(
+            state, x, refit, lambda pose: recheck_twins(tracker.body, s, bare, pose), pixels, s,
+            judge=judge if judge_tile else None)
+        if turned:
+            return y, changes, "heading"
+        y, more, swapped = recheck_limb_sides(
+            state, x, refit, lambda pose: limb_swapped_twins(tracker.body, pose), s)
+        if swapped:
+            return y, {**changes, **more}, "limbs"
+    if tracker.forest is not None:
+        with recorder.timed("reach"):
+            y, more, reached = recheck_reach(
+                state, x, refit, bare, lambda pose: reach_candidates(
+                    tracker.body, pose, frame_proposals(tracker, frame),
+                    s.propose.min_confidence), s)
+        if reached:
+            return y, {**changes, **more}, "reach"
+    if not due(state, s.heading.search_every):
+        return x, changes, None
+    with recorder.timed("heading"):
+        _, e_x = refit(x)
+        taken, more = recheck_by_search(state, x, e_x, flip_searcher(tracker, bare, frame),
+                                        pixels, s)
+    if taken is None:
+        return x, changes, None
+    return taken, {**changes, **more}, "search"
+
+
+def heading_twins(body, settings, pose):
+    """The swapped twins of ``pose (48,)`` the heading checks climb, ``(K, 48)``
+    (:attr:`HeadingSettings.twin_starts`)."""
+    return swapped_twins(body, pose, settings.heading.twin_starts)
+
+
+def recheck_twins(body, settings, energy, pose):
+    """The twins of ``pose (48,)`` the heading recheck climbs, ``(k, 48)``: with
+    :attr:`HeadingSettings.twin_climbs` ``k > 0``, the ``k`` of :func:`heading_twins` with
+    the lowest unclimbed ``energy`` (``(N, 48) -> (N,)``, one batch); else all of them."""
+    twins = heading_twins(body, settings, pose)
+    k = settings.heading.twin_climbs
+    if k <= 0 or k >= len(twins):
+        return twins
+    return twins[np.argsort(energy(twins), kind="stable")[:k]]
+
+
+def flip_searcher(tracker, energy, frame):
+    """``(heading, body_axis) -> (pose (48,), energy)``: the global search on ``frame`` with
+    those priors (:func:`.heading.flip_search`)."""
+    def run(heading, body_axis):
+        x, e, _ = global_search(tracker, energy, frame, heading=heading, body_axis=body_axis)
+        return x, e
+    return run
+
+
+def turned_start(tracker, frame):
+    """``pose (48,) -> pose (48,) or None``: the turned twin of a pose, climbed on the start
+    ``frame`` (re-uploaded; :attr:`HeadingSettings.start_twin` says which twin); None where
+    it faces the other side than the user's :attr:`StartSettings.facing` by more than
+    ``facing_margin``."""
+    s = tracker.settings
+    g = s.start
+
+    def turn(pose):
+        tracker.renderers.upload(frame)
+        energy = tracker._energy(frame)
+        kind = s.heading.start_twin
+        if kind == "search":
+            x, _ = flip_search(flip_searcher(tracker, energy, frame), pose)
+        else:
+            twins = (heading_twins(tracker.body, s, pose) if kind == "swapped"
+                     else [turned_pose(pose)])
+            fits = [climb(energy, tracker.climbers.start, t, tracker.recorder, passes=g.passes)
+                    for t in twins]
+            x = min(fits, key=lambda f: float(f[1]))[0]
+        if x is None or wrong_side(x, g.facing, start_up(frame.foreground), g.facing_margin)[0]:
+            return None
+        return x
+    return turn
