@@ -28,7 +28,8 @@ sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
-from depthtrack.track.heading import facing_direction, fit_joints, swapped_twins  # noqa: E402
+from depthtrack.track.heading import (facing_direction, fit_joints, limb_swapped_twins,  # noqa: E402
+                                      swapped_twins)
 from depthtrack.track.judge import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
@@ -41,6 +42,10 @@ def main(argv=None) -> int:
     parser = track_parser(__doc__, "tools/heading_tiles.py OUT/dev/sequences/overhead_c2_s1 "
                                    "OUT/dev/tracks/overhead_c2_s1/hc+ep 5,15,25,35,45")
     parser.add_argument("frames", help="comma-separated frames (>= 1)")
+    parser.add_argument("--limbs", action="store_true",
+                        help="the twins with the legs' or the arms' sides exchanged "
+                             "(heading.limb_swapped_twins, the limbs' recheck) instead of the "
+                             "front/back twin")
     args = parser.parse_args(argv)
     try:
         try:
@@ -61,8 +66,9 @@ def main(argv=None) -> int:
                 return climb(energy, tr.climbers.start, pose, tr.recorder)[0]
 
             kept = climbed(poses[f])
-            twin = min((climbed(t) for t in swapped_twins(body, kept, settings.heading.twin_starts)),
-                       key=energy.one)
+            twins = ([t for _, t in limb_swapped_twins(body, kept)] if args.limbs
+                     else swapped_twins(body, kept, settings.heading.twin_starts))
+            twin = min((climbed(t) for t in twins), key=energy.one)
             fitted = climbed(fit_joints(body, truth, kept))
 
             def error(pose):

@@ -130,7 +130,7 @@ def _complete_view(tracker, depth, foreground, take, pending):
 
 #: The state's event lists (each entry a dict with the log index ``frame``) that a backward
 #: track's events join.
-EVENT_LISTS = ("recoveries", "heading_switches", "limb_swaps", "reaches")
+EVENT_LISTS = ("recoveries", "heading_switches", "limb_swaps", "reaches", "reseats")
 
 
 def _track_back(tracker, state, early, first):

@@ -15,7 +15,9 @@ import numpy as np
 from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
 from .proposals import frame_proposals
-from .reach import reach_candidates, recheck_reach
+from .hill_climb import restrict_blocks
+from .reach import LIMBS, reach_candidates, recheck_reach
+from .reseat import limb_library, recheck_reseat
 from .search import climb
 from .start import global_search, start_up, wrong_side
 
@@ -23,13 +25,14 @@ from .start import global_search, start_up, wrong_side
 def recheck_stage(tracker, state, energy, frame, x):
     """The rechecks of a frame, each where due: :func:`.heading.recheck_heading`, then
     :func:`.heading.recheck_limb_sides`, then with the recogniser
-    :func:`.reach.recheck_reach`, then :func:`.heading.recheck_by_search`; the first that
-    replaces the pose ends them.
+    :func:`.reach.recheck_reach`, then :func:`.reseat.recheck_reseat`, then
+    :func:`.heading.recheck_by_search`; the first that replaces the pose ends them.
 
     ``energy``: the frame's energy (its prior is dropped here); ``x (48,)``: the tracked pose.
 
     Returns ``(pose (48,), state changes, switched)``: ``switched`` is None, or which
-    recheck replaced the pose (``"heading"``, ``"limbs"``, ``"reach"``, ``"search"``).
+    recheck replaced the pose (``"heading"``, ``"limbs"``, ``"reach"``, ``"reseat"``,
+    ``"search"``).
     """
     s, recorder = tracker.settings, tracker.recorder
     bare = energy.without_prior().on(tracker.renderers.at_tile(s.heading.recheck_tile))
@@ -65,6 +68,16 @@ def recheck_stage(tracker, state, energy, frame, x):
                     s.propose.min_confidence), s)
         if reached:
             return y, {**changes, **more}, "reach"
+    if s.heading.reseat_every:
+        def climb_limb(pose, limb):
+            blocks = restrict_blocks(tracker.climbers.start.blocks, LIMBS[limb])
+            return climb(bare, tracker.climbers.start, pose, recorder, blocks=blocks,
+                         level_offset=s.heading.refit_level)
+        with recorder.timed("reseat"):
+            y, more, reseated = recheck_reseat(state, x, refit, bare, climb_limb, limb_library(),
+                                               s, clip=tracker.body.clip)
+        if reseated:
+            return y, {**changes, **more}, "reseat"
     if not due(state, s.heading.search_every):
         return x, changes, None
     with recorder.timed("heading"):

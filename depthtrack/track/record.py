@@ -11,7 +11,7 @@ from contextlib import contextmanager
 #: Timed stages (seconds). ``association`` and ``recover`` include the render, search,
 #: detect and evidence time spent inside them; ``search`` excludes its render time.
 STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover",
-          "heading", "propose", "reach", "polish")
+          "heading", "propose", "reach", "reseat", "polish")
 #: Counters. ``correspondences`` / ``accepted`` count every correspondence the association
 #: tried / kept; ``proposal_correspondences`` / ``proposal_accepted`` those of them from the
 #: recogniser's joint proposals (``ProposalSettings.evidence``).
@@ -107,7 +107,7 @@ class Recorder:
                 "fps_excluding_init": round(tracked / tracking, 3) if frames > 1 else None,
                 "candidates_per_frame": round(cands / tracked, 1),
                 # where they went: the innermost timed stage that asked for them (the rechecks
-                # under "heading" and "reach", the per-frame climb under "search", "other"
+                # under "heading", "reach" and "reseat", the per-frame climb under "search", "other"
                 # outside every stage)
                 "candidates_per_frame_by_stage": {
                     k: round((v - self._by_stage_after_init.get(k, 0)) / tracked, 1)

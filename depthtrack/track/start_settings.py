@@ -243,6 +243,13 @@ class HeadingSettings:
     instead of keeping the initial heading. One render per checked frame and track. Not
     adopted: on nine dev sequences it put overhead seed 1 right (23 -> 99 %) and 05_20 seed
     1 wrong (77 -> 54 %, a 0.2 % lead) (README, "Front or back at a finer tile").
+
+    ``reseat_every``: every that many frames (0 = never) each limb of the tracked pose is set
+    to every pose of the limb library (k-means centres of the train motions' arm and leg
+    poses, one batch), the ``reseat_climbs`` lowest of each limb are climbed over that limb,
+    and the lowest replaces the track when its energy is lower than the tracked pose's,
+    climbed alike, by the fraction ``reseat_margin`` (:func:`.reseat.recheck_reseat`: a limb
+    held in the wrong basin, which the climb's small steps do not leave).
     """
 
     frames: int = 10
@@ -268,6 +275,9 @@ class HeadingSettings:
     recheck_tile: int = 0
     judge_tile: int = 256
     judge_start: bool = False
+    reseat_every: int = 0
+    reseat_margin: float = 0.01
+    reseat_climbs: int = 1
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -276,8 +286,9 @@ class HeadingSettings:
                                                f"{', '.join(START_TWINS)}, not {self.start_twin!r}")
         _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
-                  "limb_every", "limb_margin", "refit_level", "twin_climbs", allow_zero=True)
-        _positive(self, "votes", "twin_passes")
+                  "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
+                  "reseat_margin", allow_zero=True)
+        _positive(self, "votes", "twin_passes", "reseat_climbs")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "

@@ -55,6 +55,9 @@ class TrackingState:
     reaches : tuple of dict
         Each time a limb was re-fitted to a far proposal: ``frame``, ``limb``, energies
         (:func:`.reach.recheck_reach`).
+    reseats : tuple of dict
+        Each time a limb was re-seated from the limb poses: ``frame``, ``limb``, energies
+        (:func:`.reseat.recheck_reseat`).
     """
 
     pose: np.ndarray | None = None
@@ -73,6 +76,7 @@ class TrackingState:
     heading_switches: tuple = ()
     limb_swaps: tuple = ()
     reaches: tuple = ()
+    reseats: tuple = ()
 
     @property
     def frame(self) -> int:

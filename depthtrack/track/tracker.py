@@ -380,6 +380,7 @@ class Tracker:
                 "heading_switches": self._indexed(self.state.heading_switches),
                 "limb_swaps": self._indexed(self.state.limb_swaps),
                 "reaches": self._indexed(self.state.reaches),
+                "reseats": self._indexed(self.state.reseats),
                 "energies": [f.get("energy") for f in self.state.log]}
 
     def _indexed(self, events) -> list:

@@ -1,0 +1,123 @@
+"""Re-seat a limb: try each arm and leg in the poses people hold, keep one the image prefers.
+
+A track can settle with a limb in the wrong basin -- an arm hanging where it is raised, a
+knee lifted toward the camera put down behind the other leg -- and the hill climbing, which
+moves a limb a few tenths of a radian at a time, does not leave it: moving the limb across
+explains the image worse on the way. On dev tracks the energy knew better: in 90_05 (a jump
+kick) and 05_20 (Kinect v2 from 120 degrees) a pose fitted to the true joints and climbed
+had 4 to 30 % lower energy than the tracked one on the tracker's own tiles
+(``tools/heading_tiles.py SEQ TRACK F --limbs``), so these are failures of the search, not
+of the energy.
+
+The limb poses (:func:`limb_library`, ``depthtrack/data/limb_poses.npz``) are k-means
+centres of the train motions' arm poses (shoulder and elbow rotations) and leg poses (hip
+and knee), made by ``tools/make_limb_poses.py``; right limbs use them mirrored. Every
+:attr:`HeadingSettings.reseat_every` frames each limb of the tracked pose is set to every
+library pose (one batch for all four limbs), the ``reseat_climbs`` best of each limb are
+climbed over that limb's joints, and the lowest replaces the track when its energy is lower
+than the tracked pose's by the fraction ``reseat_margin``. The limbs are set on the tracked
+pose climbed as every recheck climbs it (without the motion prior, whole body), so a
+re-seated limb competes with the pose it would replace on equal terms: set on the pose
+as tracked, the limb's climb alone could not make up for the rest of the body's, and the
+re-seated poses trailed by 1 to 14 % where they were right.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ..body.skeleton import POSE_INDEX
+from .heading import due
+from .reach import LIMBS
+
+#: Pose slots of each limb's (:data:`.reach.LIMBS`) two upper joints (rotation vectors), the
+#: library's six numbers.
+LIMB_SLOTS = {limb: [POSE_INDEX[f"{joint}_{axis}"] for joint in joints[:2] for axis in ("rx", "ry", "rz")]
+              for limb, joints in LIMBS.items()}
+#: The sagittal mirror of a limb's six numbers: a right limb's pose is a left one's with
+#: the y and z components of each rotation vector negated (as the joint limits are).
+MIRROR = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
+def library_path() -> Path:
+    return Path(str(resources.files("depthtrack") / "data" / "limb_poses.npz"))
+
+
+@lru_cache(maxsize=4)
+def limb_library(path=None) -> dict:
+    """``{"arm": (K, 6), "leg": (K, 6)}`` left-limb poses (read once per path)."""
+    with np.load(path or library_path()) as data:
+        return {"arm": np.array(data["arm"], dtype=np.float64),
+                "leg": np.array(data["leg"], dtype=np.float64)}
+
+
+def reseat_candidates(pose, library, clip=None):
+    """Every limb of ``pose (48,)`` set to every library pose.
+
+    Returns ``(limbs, poses)``: ``limbs`` the limb name of each candidate, ``poses (N, 48)``
+    (``N = 2 * (K_arm + K_leg)``), clipped by ``clip`` (``poses -> poses``) when given.
+    """
+    pose = np.asarray(pose, dtype=np.float64)
+    limbs, out = [], []
+    for name, slots in LIMB_SLOTS.items():
+        side, kind = name.split("_")
+        values = library[kind] * (MIRROR if side == "r" else 1.0)
+        batch = np.repeat(pose[None], len(values), axis=0)
+        batch[:, slots] = values
+        out.append(batch)
+        limbs += [name] * len(values)
+    poses = np.concatenate(out)
+    return limbs, (clip(poses) if clip is not None else poses)
+
+
+def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, clip=None):
+    """The re-seat recheck of one frame: keep ``pose`` or one with a limb re-seated.
+
+    Parameters
+    ----------
+    state : TrackingState
+        Before this frame is logged.
+    pose : (48,) float
+        The frame's tracked pose.
+    refit : callable ``(pose (48,)) -> (pose (48,), float)``
+        As for :func:`.heading.recheck_heading` (the tracked pose's climbed energy).
+    energy : callable ``(N, 48) -> (N,)``
+        The recheck's energy (no motion prior), one batch.
+    climb_limb : callable ``(pose (48,), limb name) -> (pose (48,), float)``
+        A climb over that limb's joints (:data:`.reach.LIMBS`).
+    library : dict
+        :func:`limb_library`.
+    settings : TrackerSettings
+
+    Returns
+    -------
+    pose : (48,) float
+        The re-seated pose when it took over, else ``pose``.
+    changes : dict
+        For the state (``reseats``).
+    switched : bool
+    """
+    h = settings.heading
+    if not h.reseat_every or not due(state, h.reseat_every):
+        return pose, {}, False
+    base, e_pose = refit(pose)           # the limbs are re-seated on the climbed pose
+    limbs, candidates = reseat_candidates(base, library, clip)
+    scores = np.asarray(energy(candidates), dtype=np.float64)
+    limbs = np.array(limbs)
+    best = None
+    for name in LIMB_SLOTS:
+        own = np.flatnonzero(limbs == name)
+        for i in own[np.argsort(scores[own], kind="stable")[:h.reseat_climbs]]:
+            y, e_y = climb_limb(candidates[i], name)
+            if best is None or e_y < best[2]:
+                best = (name, y, float(e_y))
+    if best is None:
+        return pose, {}, False
+    name, y, e_y = best
+    lead = (e_pose - e_y) / max(abs(e_pose), 1e-9)
+    if lead <= h.reseat_margin:
+        return pose, {}, False
+    event = {"frame": state.frame, "limb": name, "energy_kept": round(float(e_pose), 1),
+             "energy_reseated": round(e_y, 1)}
+    return np.asarray(y, dtype=np.float64), {"reseats": state.reseats + (event,)}, True

@@ -1,0 +1,122 @@
+"""Re-seating a limb from the limb library (depthtrack/track/reseat.py)."""
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.body.skeleton import LOWER, POSE_INDEX, UPPER
+from depthtrack.contract import JOINT_INDEX
+from depthtrack.io import open_sequence
+from depthtrack.synth.generate import synthesize_procedural
+from depthtrack.track import TrackerSettings
+from depthtrack.track.reseat import (LIMB_SLOTS, MIRROR, limb_library, recheck_reseat,
+                                     reseat_candidates)
+from depthtrack.track.state import TrackingState
+from depthtrack.track.tracker import Tracker, fit_pose_to_joints
+
+R_ARM = [JOINT_INDEX[n] for n in ("r_elbow", "r_wrist")]
+
+
+@pytest.fixture(scope="module")
+def squat(tmp_path_factory):
+    """6 frames of a half squat, arms forward (SR4000, ToF noise)."""
+    d = tmp_path_factory.mktemp("squat") / "seq"
+    synthesize_procedural("squat", d, start=0.6, seconds=0.24, seed=3)
+    return open_sequence(d)
+
+
+def test_the_shipped_library_holds_arm_and_leg_poses_within_the_joint_limits():
+    lib = limb_library()
+    assert set(lib) == {"arm", "leg"}
+    for kind in ("arm", "leg"):
+        values = lib[kind]
+        assert values.shape[1] == 6 and 16 <= len(values) <= 64
+        slots = LIMB_SLOTS[f"l_{kind}"]
+        assert (values >= LOWER[slots] - 1e-6).all() and (values <= UPPER[slots] + 1e-6).all()
+        # spread, not all variations of one pose: the poses reach far apart
+        assert np.ptp(values[:, 0]) > 1.5
+    # the mirror maps the left limits onto the right ones
+    for kind in ("arm", "leg"):
+        left, right = LIMB_SLOTS[f"l_{kind}"], LIMB_SLOTS[f"r_{kind}"]
+        lo, hi = LOWER[left] * MIRROR, UPPER[left] * MIRROR
+        np.testing.assert_allclose(np.minimum(lo, hi), LOWER[right])
+        np.testing.assert_allclose(np.maximum(lo, hi), UPPER[right])
+
+
+def test_candidates_set_one_limb_each_and_mirror_the_right_side():
+    lib = {"arm": np.array([[0.1, 0.2, 0.3, -0.5, 0.1, 0.2]]),
+           "leg": np.array([[-0.4, 0.1, 0.2, 0.8, 0.0, 0.1]])}
+    pose = np.linspace(-0.3, 0.3, 48)
+    limbs, poses = reseat_candidates(pose, lib)
+    assert limbs == ["l_arm", "r_arm", "l_leg", "r_leg"] and poses.shape == (4, 48)
+    for name, p in zip(limbs, poses):
+        slots = LIMB_SLOTS[name]
+        side, kind = name.split("_")
+        want = lib[kind][0] * (MIRROR if side == "r" else 1.0)
+        np.testing.assert_array_equal(p[slots], want)
+        rest = np.setdiff1d(np.arange(48), slots)
+        np.testing.assert_array_equal(p[rest], pose[rest])
+    assert LIMB_SLOTS["r_arm"][:3] == [POSE_INDEX[f"r_shoulder_{a}"] for a in ("rx", "ry", "rz")]
+
+
+def test_the_recheck_takes_a_reseated_limb_only_on_a_clear_lead_and_when_due():
+    """A toy energy (no renderer): the distance of the right arm's slots to a target. The
+    refit climbs nothing; the limb's climb returns the candidate as it is."""
+    lib = {"arm": np.array([[0.0] * 6, [-1.4, 0.0, 0.0, -0.5, 0.0, 0.0]]),
+           "leg": np.array([[0.0] * 6])}
+    target = lib["arm"][1] * MIRROR
+    slots = LIMB_SLOTS["r_arm"]
+
+    def energy(poses):
+        return 100.0 + np.abs(np.atleast_2d(poses)[:, slots] - target).sum(axis=1)
+
+    refit = lambda pose: (pose, float(energy(pose)[0]))                  # noqa: E731
+    climb_limb = lambda pose, limb: (pose, float(energy(pose)[0]))       # noqa: E731
+    s = TrackerSettings(heading={"reseat_every": 2})
+    state = TrackingState(log=({},) * 4)
+    pose = np.zeros(48)
+    y, changes, switched = recheck_reseat(state, pose, refit, energy, climb_limb, lib, s)
+    assert switched and np.allclose(y[slots], target)
+    event = changes["reseats"][0]
+    assert event["limb"] == "r_arm" and event["frame"] == 4
+    assert event["energy_reseated"] < event["energy_kept"]
+    # not due on an odd frame; never with reseat_every 0
+    odd = TrackingState(log=({},) * 5)
+    assert recheck_reseat(odd, pose, refit, energy, climb_limb, lib, s)[2] is False
+    off = TrackerSettings()
+    assert off.heading.reseat_every == 0
+    assert recheck_reseat(state, pose, refit, energy, climb_limb, lib, off)[2] is False
+    # a lead under the margin keeps the pose (the target 1.9 away: 1.9 % of ~101.9)
+    strict = TrackerSettings(heading={"reseat_every": 2, "reseat_margin": 0.02})
+    assert recheck_reseat(state, pose, refit, energy, climb_limb, lib, strict)[2] is False
+    with pytest.raises(ValueError, match="reseat_climbs"):
+        TrackerSettings(heading={"reseat_climbs": 0})
+
+
+def test_an_arm_held_behind_the_back_is_reseated_while_tracking(squat):
+    """The right arm starts swung back behind the body while it is held forward. "hc" (no
+    recogniser, no association) climbs it back only slowly; the re-seat puts it back on its
+    first due frame. Without it the arm is still far off on that frame."""
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x0 = fit_pose_to_joints(body, truth[0])
+    x0[LIMB_SLOTS["r_arm"]] = [0.9, 0.0, 0.0, -0.2, 0.0, 0.0]         # swung back
+    depths = [squat.depth(i) for i in range(len(squat))]
+
+    def arm_errors(settings):
+        with Tracker(body, squat.camera, method="hc", settings=settings) as tracker:
+            state, _, _ = tracker.start(TrackingState(), depths[0], pose=x0)
+            joints = []
+            for depth in depths[1:]:
+                state, x = tracker.advance(state, depth)
+                joints.append(body.joint_positions(x)[R_ARM])
+        err = np.linalg.norm(np.array(joints) - truth[1:, R_ARM], axis=-1).mean(axis=-1)
+        return err, state.reseats
+
+    common = {"every": 0, "limb_every": 0}
+    err, reseats = arm_errors(TrackerSettings(heading={**common, "reseat_every": 2}))
+    assert err[0] > 0.5                                  # frame 1: not yet due
+    assert reseats[0]["limb"] == "r_arm" and reseats[0]["frame"] == 2
+    assert reseats[0]["energy_reseated"] < 0.97 * reseats[0]["energy_kept"]
+    assert err[1:].max() < 0.08                          # frames 2-5
+    stuck, none = arm_errors(TrackerSettings(heading=common))
+    assert not none and stuck[1] > 0.5

@@ -1,0 +1,126 @@
+#!/usr/bin/env python
+"""Cluster the train motions' arm and leg poses; write depthtrack/data/limb_poses.npz.
+
+Usage::
+
+    .venv/bin/python tools/make_limb_poses.py [-o depthtrack/data/limb_poses.npz]
+        [--data ../shared/data] [--clusters 32] [--fps 10] [--seed 0]
+
+The inputs are the ``train`` clips of ``depthtrack/data/motion_split.json`` (never dev or
+test), each read with :func:`depthtrack.io.bvh.read_bvh`, retargeted onto the default body
+and resampled to ``--fps``. Per frame, each arm gives its shoulder and elbow rotation
+vectors and each leg its hip and knee ones (six numbers, the parent-relative rotations of
+the pose vector); a right limb is mirrored onto the left (``(rx, ry, rz) -> (rx, -ry,
+-rz)``, the sagittal mirror the body's joint limits follow), so both sides share one set.
+k-means (``scipy.cluster.vq.kmeans2``, seeded) reduces each set to ``4 * --clusters``
+centres, largest first, and farthest-point sampling of where each centre puts the limb's
+middle and end joints keeps ``--clusters`` of them spread over the reachable space, which :mod:`depthtrack.track.reseat` puts on a tracked body's limb to look for a basin the
+hill climbing cannot reach from where the limb is.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.cluster.vq import kmeans2
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tools"))
+
+from depthtrack.body.model import BodyModel  # noqa: E402
+from depthtrack.body.skeleton import LOWER, UPPER  # noqa: E402
+from depthtrack.contract import JOINT_NAMES  # noqa: E402
+from depthtrack.io.atomic import write_bytes_atomic  # noqa: E402
+from depthtrack.io.bvh import read_bvh  # noqa: E402
+from depthtrack.motion.retarget import resample_poses, retarget  # noqa: E402
+from depthtrack.track.reseat import LIMB_SLOTS, MIRROR  # noqa: E402
+from make_motion_prior import train_clips  # noqa: E402
+
+
+def limb_samples(poses):
+    """``{"arm": (2F, 6), "leg": (2F, 6)}``: every frame's left limbs and mirrored right ones,
+    clipped to the joint limits."""
+    out = {}
+    for kind in ("arm", "leg"):
+        slots = LIMB_SLOTS[f"l_{kind}"]
+        left = poses[:, slots]
+        right = poses[:, LIMB_SLOTS[f"r_{kind}"]] * MIRROR
+        # within the body's joint limits, as the tracker would clip them
+        out[kind] = np.clip(np.concatenate([left, right]), LOWER[slots], UPPER[slots])
+    return out
+
+
+def limb_points(body, kind, values):
+    """``(K, 6)`` where a left limb set to each of ``values (K, 6)`` puts its middle and end
+    joints (elbow and wrist, or knee and ankle), relative to its root joint, trunk upright."""
+    poses = np.zeros((len(values), body.dof))
+    poses[:, LIMB_SLOTS[f"l_{kind}"]] = values
+    joints = np.asarray(body.joint_positions(poses))
+    names = list(JOINT_NAMES)
+    root, mid, end = (("l_shoulder", "l_elbow", "l_wrist") if kind == "arm"
+                      else ("l_hip", "l_knee", "l_ankle"))
+    r = joints[:, names.index(root)]
+    return np.concatenate([joints[:, names.index(mid)] - r, joints[:, names.index(end)] - r], axis=1)
+
+
+def spread(points, k):
+    """Indices of ``k`` of ``points (N, D)`` by farthest-point sampling from the first (the
+    largest cluster): the library covers where limbs go, not only where they mostly are."""
+    picked = [0]
+    dist = np.linalg.norm(points - points[0], axis=1)
+    while len(picked) < min(k, len(points)):
+        i = int(np.argmax(dist))
+        picked.append(i)
+        dist = np.minimum(dist, np.linalg.norm(points - points[i], axis=1))
+    return np.array(picked)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", default=str(REPO.parent / "shared" / "data"))
+    parser.add_argument("-o", "--output", default=str(REPO / "depthtrack" / "data" / "limb_poses.npz"))
+    parser.add_argument("--clusters", type=int, default=32)
+    parser.add_argument("--fps", type=float, default=10.0)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    files = train_clips(args.data)
+    missing = [str(f) for f in files if not f.is_file()]
+    if missing:
+        print(f"make_limb_poses: train clips not found: {', '.join(missing)}", file=sys.stderr)
+        return 2
+    body = BodyModel.default()
+    samples = {"arm": [], "leg": []}
+    for f in files:
+        motion = read_bvh(f)
+        poses = retarget(motion, body)
+        poses = resample_poses(poses[motion.leading_jump():], motion.fps, args.fps)
+        for kind, s in limb_samples(poses).items():
+            samples[kind].append(s)
+        print(f"{f.name}: {len(poses)} frames at {args.fps:g} Hz")
+    rng = np.random.default_rng(args.seed)
+    out = {}
+    for kind, parts in samples.items():
+        data = np.concatenate(parts)
+        centres, labels = kmeans2(data, 4 * args.clusters, minit="++", seed=rng)
+        counts = np.bincount(labels, minlength=len(centres))
+        centres = centres[counts > 0]
+        picked = spread(limb_points(body, kind, centres), args.clusters)
+        out[kind] = centres[picked]
+        print(f"{kind}: {len(data)} samples -> {len(centres)} clusters -> {len(picked)} spread")
+    import io
+    buf = io.BytesIO()
+    np.savez(buf, arm=out["arm"], leg=out["leg"],
+             clips=np.array([f.name for f in files]),
+             about=np.array("left-limb (shoulder, elbow) and (hip, knee) rotation vectors: "
+                            "k-means centres of the train clips' frames, spread by farthest-"
+                            "point sampling of the limb's joints; made by tools/make_limb_poses.py"))
+    write_bytes_atomic(args.output, buf.getvalue())
+    print(f"wrote {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
