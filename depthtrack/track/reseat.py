@@ -71,6 +71,26 @@ def reseat_candidates(pose, library, clip=None):
     return limbs, (clip(poses) if clip is not None else poses)
 
 
+def best_reseat(pose, energy, climb_limb, library, climbs: int = 1, clip=None):
+    """The best re-seat of ``pose (48,)``: every limb set to every library pose, scored by
+    ``energy`` (``(N, 48) -> (N,)``, one batch), the ``climbs`` lowest of each limb climbed
+    by ``climb_limb`` (``(pose, limb) -> (pose, energy)``).
+
+    Returns ``(limb, pose (48,), energy)`` of the lowest climbed.
+    """
+    limbs, candidates = reseat_candidates(pose, library, clip)
+    scores = np.asarray(energy(candidates), dtype=np.float64)
+    limbs = np.array(limbs)
+    best = None
+    for name in LIMB_SLOTS:
+        own = np.flatnonzero(limbs == name)
+        for i in own[np.argsort(scores[own], kind="stable")[:climbs]]:
+            y, e_y = climb_limb(candidates[i], name)
+            if best is None or float(e_y) < best[2]:
+                best = (name, np.asarray(y, dtype=np.float64), float(e_y))
+    return best
+
+
 def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, clip=None):
     """The re-seat recheck of one frame: keep ``pose`` or one with a limb re-seated.
 
@@ -102,19 +122,7 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     if not h.reseat_every or not due(state, h.reseat_every):
         return pose, {}, False
     base, e_pose = refit(pose)           # the limbs are re-seated on the climbed pose
-    limbs, candidates = reseat_candidates(base, library, clip)
-    scores = np.asarray(energy(candidates), dtype=np.float64)
-    limbs = np.array(limbs)
-    best = None
-    for name in LIMB_SLOTS:
-        own = np.flatnonzero(limbs == name)
-        for i in own[np.argsort(scores[own], kind="stable")[:h.reseat_climbs]]:
-            y, e_y = climb_limb(candidates[i], name)
-            if best is None or e_y < best[2]:
-                best = (name, y, float(e_y))
-    if best is None:
-        return pose, {}, False
-    name, y, e_y = best
+    name, y, e_y = best_reseat(base, energy, climb_limb, library, h.reseat_climbs, clip)
     lead = (e_pose - e_y) / max(abs(e_pose), 1e-9)
     if lead <= h.reseat_margin:
         return pose, {}, False

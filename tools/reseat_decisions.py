@@ -1,0 +1,92 @@
+"""The re-seat recheck's decisions on a kept track, each judged by the ground truth.
+
+On every ``--every``-th frame of a track, the re-seat (``reseat.recheck_reseat``) runs as
+the tracker runs it: the track's pose climbed without the motion prior on the recheck's
+tiles, each limb set to every pose of the limb library, the lowest of each limb climbed
+over that limb. Printed per frame: the best re-seated limb's energy lead over the climbed
+pose (positive = lower energy), and the mean joint error of both. The summary counts, for
+leads over each margin, how often the re-seat would have made the frame's error better or
+worse by more than 2 cm: how good the decision is, apart from where the track goes next
+(one changed frame changes every frame after it, and a benchmark's paired differences
+mostly measure that).
+
+    .venv/bin/python tools/reseat_decisions.py SEQ TRACK [--every 4] [--json OUT.json]
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import numpy as np
+
+REPO = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tools"))
+
+from depthtrack.errors import InputError  # noqa: E402
+from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.hill_climb import restrict_blocks  # noqa: E402
+from depthtrack.track.reach import LIMBS  # noqa: E402
+from depthtrack.track.reseat import best_reseat, limb_library  # noqa: E402
+from depthtrack.track.search import climb  # noqa: E402
+from depthtrack.track.tracker import Tracker  # noqa: E402
+from track_replay import frame_energy, read_track, track_parser  # noqa: E402
+
+MARGINS = (0.0, 0.01, 0.02, 0.03, 0.05)
+#: A frame's mean joint error counts as changed beyond this (metres).
+CHANGED = 0.02
+
+
+def main(argv=None) -> int:
+    parser = track_parser(__doc__, "tools/reseat_decisions.py OUT/dev/sequences/90_05_c0_s2 "
+                                   "OUT/dev/tracks/90_05_c0_s2/hc+ep --every 4")
+    parser.add_argument("--every", type=int, default=4, help="every that many frames (from 4)")
+    parser.add_argument("--json", type=pathlib.Path, help="also write the decisions here")
+    args = parser.parse_args(argv)
+    try:
+        if args.every < 1:
+            raise InputError(None, f"--every must be at least 1, not {args.every}")
+        seq, body, poses = read_track(args.seq, args.track, [1])
+        frames = list(range(args.every, len(poses), args.every))
+    except (InputError, OSError, KeyError) as exc:
+        print(f"reseat_decisions: {exc}", file=sys.stderr)
+        return 2
+    settings = TrackerSettings()
+    library = limb_library()
+    rows = []
+    with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=settings) as tr:
+        start = tr.climbers.start
+
+        def error(pose, f):
+            return float(np.linalg.norm(body.joint_positions(pose) - seq.joints[f], axis=1).mean())
+
+        for f in frames:
+            if not np.isfinite(poses[f]).all():
+                continue
+            _, energy = frame_energy(tr, seq, poses, f)
+            base, e_base = climb(energy, start, poses[f], tr.recorder)
+
+            def climb_limb(pose, limb):
+                return climb(energy, start, pose, tr.recorder,
+                             blocks=restrict_blocks(start.blocks, LIMBS[limb]))
+            name, y, e_y = best_reseat(base, energy, climb_limb, library, clip=body.clip)
+            row = {"frame": f, "limb": name, "lead": (e_base - e_y) / abs(e_base),
+                   "error_m": error(base, f), "error_reseated_m": error(y, f)}
+            rows.append(row)
+            print(f"frame {f:3d}: {name} lead {100 * row['lead']:+5.1f} %, mean joint error "
+                  f"{100 * row['error_m']:4.1f} -> {100 * row['error_reseated_m']:4.1f} cm", flush=True)
+    for m in MARGINS:
+        taken = [r for r in rows if r["lead"] > m]
+        better = sum(r["error_reseated_m"] < r["error_m"] - CHANGED for r in taken)
+        worse = sum(r["error_reseated_m"] > r["error_m"] + CHANGED for r in taken)
+        print(f"margin {m:.2f}: taken on {len(taken)} of {len(rows)} frames, better by > 2 cm "
+              f"{better}, worse by > 2 cm {worse}")
+    if args.json:
+        args.json.write_text(json.dumps({"sequence": str(args.seq), "track": str(args.track),
+                                         "rows": rows}, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
