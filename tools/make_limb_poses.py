@@ -20,6 +20,7 @@ hill climbing cannot reach from where the limb is.
 from __future__ import annotations
 
 import argparse
+import io
 import sys
 from pathlib import Path
 
@@ -110,7 +111,6 @@ def main(argv=None) -> int:
         picked = spread(limb_points(body, kind, centres), args.clusters)
         out[kind] = centres[picked]
         print(f"{kind}: {len(data)} samples -> {len(centres)} clusters -> {len(picked)} spread")
-    import io
     buf = io.BytesIO()
     np.savez(buf, arm=out["arm"], leg=out["leg"],
              clips=np.array([f.name for f in files]),

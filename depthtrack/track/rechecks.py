@@ -1,12 +1,13 @@
 """Stage "recheck": whether the tracked pose faces the right way, has its limbs on the
-right sides and reaches where the recogniser sees the parts, each where due; and the
-turned twin the start's front/back check tracks (:func:`turned_start`).
+right sides, reaches where the recogniser sees the parts and (when asked) has a limb the
+limb library would seat better, each where due; and the turned twin the start's
+front/back check tracks (:func:`turned_start`).
 
-The decisions are pure functions in :mod:`.heading` and :mod:`.reach`; this module hands
-them the tracker's climbers, renderers and body. Every recheck scores without the motion
-prior (a switch breaks the motion) on tiles of :attr:`HeadingSettings.recheck_tile`
-pixels; the front/back recheck judges its two climbed poses on
-:attr:`HeadingSettings.judge_tile` tiles.
+The decisions are pure functions in :mod:`.heading`, :mod:`.reach` and :mod:`.reseat`;
+this module hands them the tracker's climbers, renderers and body. Every recheck scores
+without the motion prior (a switch breaks the motion) on tiles of
+:attr:`HeadingSettings.recheck_tile` pixels; the front/back recheck judges its two
+climbed poses on :attr:`HeadingSettings.judge_tile` tiles.
 """
 from __future__ import annotations
 
@@ -14,8 +15,8 @@ import numpy as np
 
 from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
-from .proposals import frame_proposals
 from .hill_climb import restrict_blocks
+from .proposals import frame_proposals
 from .reach import LIMBS, reach_candidates, recheck_reach
 from .reseat import limb_library, recheck_reseat
 from .search import climb

@@ -119,7 +119,7 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     switched : bool
     """
     h = settings.heading
-    if not h.reseat_every or not due(state, h.reseat_every):
+    if not due(state, h.reseat_every):
         return pose, {}, False
     base, e_pose = refit(pose)           # the limbs are re-seated on the climbed pose
     name, y, e_y = best_reseat(base, energy, climb_limb, library, h.reseat_climbs, clip)
