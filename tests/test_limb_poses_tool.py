@@ -1,0 +1,55 @@
+"""tools/make_limb_poses.py: the limb library from the train clips only, reproducibly."""
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.track.reseat import LIMB_SLOTS, MIRROR, library_path
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO.parent / "shared" / "data"
+
+
+def _tool():
+    spec = importlib.util.spec_from_file_location("make_limb_poses", REPO / "tools" / "make_limb_poses.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_spread_picks_the_farthest_points_first():
+    points = np.array([[0.0], [0.1], [1.0], [0.5], [0.9]])
+    assert _tool().spread(points, 3).tolist() == [0, 2, 3]       # 0, then 1.0, then 0.5
+
+
+def test_right_limbs_are_mirrored_onto_the_left_ones():
+    tool = _tool()
+    left = np.array([0.3, 0.2, -0.1, -1.0, 0.1, 0.2])
+    pose = np.zeros((1, 48))
+    pose[0, LIMB_SLOTS["l_arm"]] = left
+    pose[0, LIMB_SLOTS["r_arm"]] = left * MIRROR
+    arms = tool.limb_samples(pose)["arm"]
+    np.testing.assert_allclose(arms[0], arms[1])
+    # and a mirrored pair of arms puts the wrists at mirrored places
+    joints = np.asarray(BodyModel.default(1.75).joint_positions(pose[0]))
+    from depthtrack.contract import JOINT_INDEX as J
+    lw, rw = joints[J["l_wrist"]], joints[J["r_wrist"]]
+    pelvis = joints[J["pelvis"]]
+    np.testing.assert_allclose(lw[1:], rw[1:], atol=1e-6)
+    assert abs((lw[0] - pelvis[0]) + (rw[0] - pelvis[0])) < 1e-6
+
+
+def test_missing_train_clips_are_refused(tmp_path, capsys):
+    out = tmp_path / "limbs.npz"
+    assert _tool().main(["--data", str(tmp_path), "-o", str(out)]) == 2
+    assert "train clips not found" in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.skipif(not (DATA / "cmu-extra").is_dir(), reason="needs ../shared/data")
+def test_the_shipped_library_is_what_the_tool_makes(tmp_path):
+    out = tmp_path / "limbs.npz"
+    assert _tool().main(["--data", str(DATA), "-o", str(out)]) == 0
+    assert out.read_bytes() == library_path().read_bytes()
