@@ -26,9 +26,7 @@ sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
-from depthtrack.track.hill_climb import restrict_blocks  # noqa: E402
-from depthtrack.track.reach import LIMBS  # noqa: E402
-from depthtrack.track.reseat import best_reseat, limb_library  # noqa: E402
+from depthtrack.track.reseat import best_reseat, limb_climber, limb_library  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
 from track_replay import frame_energy, read_track, track_parser  # noqa: E402
@@ -66,11 +64,8 @@ def main(argv=None) -> int:
                 continue
             _, energy = frame_energy(tr, seq, poses, f)
             base, e_base = climb(energy, start, poses[f], tr.recorder)
-
-            def climb_limb(pose, limb):
-                return climb(energy, start, pose, tr.recorder,
-                             blocks=restrict_blocks(start.blocks, LIMBS[limb]))
-            name, y, e_y = best_reseat(base, energy, climb_limb, library, clip=body.clip)
+            name, y, e_y = best_reseat(base, energy, limb_climber(energy, start, tr.recorder),
+                                       library, clip=body.clip)
             row = {"frame": f, "limb": name, "lead": (e_base - e_y) / abs(e_base),
                    "error_m": error(base, f), "error_reseated_m": error(y, f)}
             rows.append(row)

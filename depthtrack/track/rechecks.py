@@ -15,10 +15,9 @@ import numpy as np
 
 from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
-from .hill_climb import restrict_blocks
 from .proposals import frame_proposals
-from .reach import LIMBS, reach_candidates, recheck_reach
-from .reseat import limb_library, recheck_reseat
+from .reach import reach_candidates, recheck_reach
+from .reseat import limb_climber, limb_library, recheck_reseat
 from .search import climb
 from .start import global_search, start_up, wrong_side
 
@@ -70,10 +69,7 @@ def recheck_stage(tracker, state, energy, frame, x):
         if reached:
             return y, {**changes, **more}, "reach"
     if s.heading.reseat_every:
-        def climb_limb(pose, limb):
-            blocks = restrict_blocks(tracker.climbers.start.blocks, LIMBS[limb])
-            return climb(bare, tracker.climbers.start, pose, recorder, blocks=blocks,
-                         level_offset=s.heading.refit_level)
+        climb_limb = limb_climber(bare, tracker.climbers.start, recorder, s.heading.refit_level)
         with recorder.timed("reseat"):
             y, more, reseated = recheck_reseat(state, x, refit, bare, climb_limb, limb_library(),
                                                s, clip=tracker.body.clip)

@@ -11,7 +11,8 @@ of the energy.
 
 The limb poses (:func:`limb_library`, ``depthtrack/data/limb_poses.npz``) are k-means
 centres of the train motions' arm poses (shoulder and elbow rotations) and leg poses (hip
-and knee), made by ``tools/make_limb_poses.py``; right limbs use them mirrored. Every
+and knee), spread by farthest-point sampling, made by ``tools/make_limb_poses.py``; right
+limbs use them mirrored. Every
 :attr:`HeadingSettings.reseat_every` frames each limb of the tracked pose is set to every
 library pose (one batch for all four limbs), the ``reseat_climbs`` best of each limb are
 climbed over that limb's joints, and the lowest replaces the track when its energy is lower
@@ -31,7 +32,9 @@ import numpy as np
 
 from ..body.skeleton import POSE_INDEX
 from .heading import due
+from .hill_climb import restrict_blocks
 from .reach import LIMBS
+from .search import climb
 
 #: Pose slots of each limb's (:data:`.reach.LIMBS`) two upper joints (rotation vectors), the
 #: library's six numbers.
@@ -40,7 +43,10 @@ LIMB_SLOTS = {limb: [POSE_INDEX[f"{joint}_{axis}"] for joint in joints[:2] for a
 #: The sagittal mirror of a limb's six numbers: a right limb's pose is a left one's with
 #: the y and z components of each rotation vector negated (as the joint limits are).
 MIRROR = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
+
+
 def library_path() -> Path:
+    """The shipped limb library, ``depthtrack/data/limb_poses.npz``."""
     return Path(str(resources.files("depthtrack") / "data" / "limb_poses.npz"))
 
 
@@ -69,6 +75,15 @@ def reseat_candidates(pose, library, clip=None):
         limbs += [name] * len(values)
     poses = np.concatenate(out)
     return limbs, (clip(poses) if clip is not None else poses)
+
+
+def limb_climber(energy, climber, recorder, level_offset: int = 0):
+    """``(pose (48,), limb) -> (pose (48,), energy)``: ``climber`` climbing ``energy`` over
+    that limb's joints only (:data:`.reach.LIMBS`), from the rung ``level_offset``."""
+    def run(pose, limb):
+        return climb(energy, climber, pose, recorder, level_offset=level_offset,
+                     blocks=restrict_blocks(climber.blocks, LIMBS[limb]))
+    return run
 
 
 def best_reseat(pose, energy, climb_limb, library, climbs: int = 1, clip=None):
@@ -105,7 +120,7 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     energy : callable ``(N, 48) -> (N,)``
         The recheck's energy (no motion prior), one batch.
     climb_limb : callable ``(pose (48,), limb name) -> (pose (48,), float)``
-        A climb over that limb's joints (:data:`.reach.LIMBS`).
+        A climb over that limb's joints (:func:`limb_climber`).
     library : dict
         :func:`limb_library`.
     settings : TrackerSettings
@@ -128,4 +143,4 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
         return pose, {}, False
     event = {"frame": state.frame, "limb": name, "energy_kept": round(float(e_pose), 1),
              "energy_reseated": round(e_y, 1)}
-    return np.asarray(y, dtype=np.float64), {"reseats": state.reseats + (event,)}, True
+    return y, {"reseats": state.reseats + (event,)}, True
