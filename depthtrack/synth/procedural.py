@@ -22,6 +22,8 @@ lowest point of the body every frame (so a body lying down rests on the floor):
 * ``overhead``   -- arms raised forward to overhead, a side bend each way, lowered;
 * ``sidestep``   -- walking sideways to the subject's left, then back;
 * ``walk-back``  -- walking backwards, away from where it faces.
+* ``cartwheel``  -- arms raised to a star, two cartwheels to the subject's left (a full
+  turn about the forward axis each, upside down halfway), the arms lowered again.
 
 Which of them may be used for what (:data:`PROCEDURAL_SPLIT`, the same rule as the
 mocap clips in ``depthtrack/data/motion_split.json``): train -- fit priors and
@@ -30,7 +32,7 @@ tune settings; test -- report only.
 
 ==========  =====================================================
 train       wave, squat, turn, mixed, spin-slow
-dev         spin-fast, bend, overhead, walk-back
+dev         spin-fast, bend, overhead, walk-back, cartwheel
 test        spin, squat-deep, lie-down, sidestep
 ==========  =====================================================
 """
@@ -41,12 +43,13 @@ import numpy as np
 #: Names accepted by :func:`procedural_motion`, with their default durations (s).
 PROCEDURAL_MOTIONS = {"wave": 4.0, "squat": 4.0, "turn": 4.0, "mixed": 8.0,
                       "spin-slow": 4.0, "spin": 4.0, "spin-fast": 3.0, "bend": 6.0, "squat-deep": 5.0,
-                      "lie-down": 10.0, "overhead": 6.0, "sidestep": 6.0, "walk-back": 5.0}
+                      "lie-down": 10.0, "overhead": 6.0, "sidestep": 6.0, "walk-back": 5.0,
+                      "cartwheel": 6.0}
 
 #: Train / dev / test assignment of the procedural motions (see the module docstring).
 PROCEDURAL_SPLIT = {
     "train": ["wave", "squat", "turn", "mixed", "spin-slow"],
-    "dev": ["spin-fast", "bend", "overhead", "walk-back"],
+    "dev": ["spin-fast", "bend", "overhead", "walk-back", "cartwheel"],
     "test": ["spin", "squat-deep", "lie-down", "sidestep"],
 }
 
@@ -209,6 +212,27 @@ def _walk(P, t, T, direction, speed=0.45):
         P.add("r_shoulder_rx", np.radians(15) * c * sign)
 
 
+def _cartwheel(P, t, T, wheels=2, turn_time=1.3, stride=1.5):
+    """Star pose, then ``wheels`` cartwheels to the subject's left, ``turn_time`` s each,
+    ``stride`` m of travel per turn, a pause of a third of a turn between them."""
+    star = _smooth(t / 0.8) * _smooth((T - t) / 0.8)
+    P.add("l_shoulder_rz", -np.radians(150) * star)   # arms up sideways (left arm: rz < 0)
+    P.add("r_shoulder_rz", np.radians(150) * star)
+    P.add("l_hip_rz", -np.radians(30) * star)          # legs apart (left leg: rz < 0)
+    P.add("r_hip_rz", np.radians(30) * star)
+    gap = turn_time / 3.0
+    start = 0.5 * (T - wheels * turn_time - (wheels - 1) * gap)
+    turns = np.zeros_like(t)
+    for k in range(wheels):
+        t0 = start + k * (turn_time + gap)
+        # the wheel speeds up into the hands and slows onto the feet, like a person's
+        x = np.clip((t - t0) / turn_time, 0.0, 1.0)
+        turns += x - np.sin(2 * np.pi * x) / (2 * np.pi) * 0.5
+    P.add("pelvis_rz", 2 * np.pi * turns)              # the head goes to the left (+x) first
+    P.add("pelvis_tx", stride * turns)
+    P.add("spine_rx", np.radians(10) * np.sin(np.pi * (turns % 1.0)))   # a slight pike
+
+
 _BENCHMARK_MOTIONS = {
     "spin-slow": lambda P, t, T: _spin(P, t, T, 1.0, 4.0),
     "spin": lambda P, t, T: _spin(P, t, T, 2.0, 2.0),
@@ -216,6 +240,7 @@ _BENCHMARK_MOTIONS = {
     "bend": _bend, "squat-deep": _squat_deep, "lie-down": _lie_down, "overhead": _overhead,
     "sidestep": lambda P, t, T: _walk(P, t, T, "left"),
     "walk-back": lambda P, t, T: _walk(P, t, T, "back"),
+    "cartwheel": _cartwheel,
 }
 
 
