@@ -234,6 +234,32 @@ def test_a_mirrored_start_is_corrected_while_tracking(squat):
     assert stuck[-5:].min() > 0.25
 
 
+def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
+    """With retro_frames, the frames the mirrored start spent back to front before the
+    recheck's switch are re-tracked from the turned pose, and come out right."""
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
+    alone = TrackerSettings().updated({"search": {"untwist": []}})
+    retro = alone.updated({"heading": {"retro_frames": 15}})
+    with Tracker(body, squat.camera, settings=retro) as tracker:
+        result = tracker.track_sequence(squat, init_pose=x0)
+        info = tracker.describe()
+    err = _errors(result.joints, truth)
+    (switch,) = info["heading_switches"]
+    (retrack,) = info["heading_retracks"]
+    assert retrack["index"] == switch["index"] and retrack["taken"]
+    assert retrack["first"] == 0 and retrack["last"] == switch["index"] - 1
+    # the two headings explain these frames alike (the mirrored even a little better):
+    # continuity with the switch is what the re-track adds
+    assert abs(retrack["energy_backward"] / retrack["energy_forward"] - 1.0) < 0.05
+    assert err.max() < 0.1                        # no frame left back to front, frame 0 included
+    # the forward track alone left them mirrored (the previous test's switch)
+    with Tracker(body, squat.camera, settings=alone) as tracker:
+        forward = _errors(tracker.track_sequence(squat, init_pose=x0).joints, truth)
+    assert forward[:switch["index"]].min() > 0.25
+
+
 def test_limb_swapped_twins_exchange_one_pair_of_limbs_and_keep_the_trunk():
     body = BodyModel.default(height=1.75)
     pose = np.zeros(48)

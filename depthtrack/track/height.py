@@ -194,6 +194,8 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     s = settings.shape
     if not s.trial_rechecks:
         settings = settings.updated(NO_RECHECKS)
+    # the trial yields its frames as it goes: no pose held back for a re-track after a switch
+    settings = settings.updated({"heading": {"retro_frames": 0}})
     if segmenter is None:
         from ..detect import segment_foreground as segmenter
     t0 = time.perf_counter()

@@ -42,6 +42,9 @@ def stream_poses(tracker, frames, init_pose=None):
     source = iter(frames)
     pending = collections.deque()   # frames read ahead and given back
     held = []              # (index, pose) not yet yielded: the track may still drop them
+    retro = s.heading.retro_frames
+    recent = collections.deque(maxlen=max(retro, 1))   # (index, depth) a switch may re-track
+    lowest = 0             # the first frame a switch may re-track: the start, or past a switch
 
     def take(n):
         out = [pending.popleft() for _ in range(min(n, len(pending)))]
@@ -56,8 +59,15 @@ def stream_poses(tracker, frames, init_pose=None):
         if i == 0 and init_pose is not None:
             tracker.state, _, x = tracker.start(tracker.state, depth, pose=init_pose)
             held.append((i, x))
+            recent.append((i, depth))
         elif tracker.state.pose is not None:
+            switches = len(tracker.state.heading_switches)
             _advance_into(tracker, held, i, depth)
+            if retro and len(tracker.state.heading_switches) > switches and \
+                    tracker.state.pose is not None:
+                retrack_before_switch(tracker, held, recent, lowest, i)
+                lowest = i + 1
+            recent.append((i, depth))
         else:
             with tracker.recorder.timed("segment"):
                 fg = tracker.segmenter(depth, tracker.camera)
@@ -72,6 +82,9 @@ def stream_poses(tracker, frames, init_pose=None):
                     i += len(early)
                 tracker.state, frame, x = tracker.start(tracker.state, depth, foreground=fg)
                 start_state = tracker.state
+                recent.clear()
+                recent.append((i, depth))
+                lowest = i
                 # no front/back check where the user said which way the person faces, unless
                 # the start is near profile (StartSettings.facing_margin)
                 clear = tracker.state.init_info.get("facing_clear") is True
@@ -84,6 +97,7 @@ def stream_poses(tracker, frames, init_pose=None):
                 if settled is not None:
                     tracker.state, poses = settled
                     started = [(i + k, p) for k, p in enumerate(poses)]
+                    recent.extend((i + 1 + k, d) for k, d in enumerate(ahead))
                     i += len(ahead)
                 else:                       # no check: the frames read ahead come next
                     started = [(i, x)]
@@ -98,7 +112,9 @@ def stream_poses(tracker, frames, init_pose=None):
                 held.extend(started)
         _stamp_indices(tracker.state.log, i)
         # frames of a streak without a person stay held: a dropped track drops them too
-        keep = len(held) - (tracker.state.absent if tracker.state.pose is not None else 0)
+        # and the last retro_frames poses, which a heading switch may yet re-track
+        keep = len(held) - max(tracker.state.absent if tracker.state.pose is not None else 0,
+                               retro)
         yield from held[:keep]
         del held[:keep]
     yield from held
@@ -156,6 +172,71 @@ def _track_back(tracker, state, early, first):
     events = {key: tuple(moved(e) for e in getattr(back[0], key)[len(getattr(state, key)):])
               for key in EVENT_LISTS}
     return [(first + k, p) for k, p in enumerate(back[1][::-1])], events
+
+
+def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> None:
+    """After a heading switch on frame ``switch``: the frames before it tracked again
+    backwards from the turned pose (:attr:`HeadingSettings.retro_frames`).
+
+    The backward track runs with the heading recheck off (it must keep the heading the
+    switch chose) through ``recent`` ``[(index, depth), ...]`` from the newest down, and
+    stops at ``lowest`` (the start, or the frame after the last switch), at a pose already
+    yielded or dropped, at a lost track, or where it agrees with the forward track (mean
+    joint distance below ``retro_agree_m``: the forward track faced the right way there).
+    Its poses replace those in ``held`` unless their energy without the motion prior on the
+    recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
+    exceeds the forward poses' on the same frames by more than the fraction
+    ``retro_margin``. The switch is the evidence: frames before it where one heading
+    explained the image clearly better would have turned the track sooner, so there the two
+    score alike, and the backward track's continuity with the turned pose is what tells
+    them apart; the margin only refuses a backward track that lost the person. Either way
+    ``tracker.state.retracks`` gets an entry.
+    The tracker's state is the switched forward state again afterwards.
+    """
+    settings = tracker.settings
+    switched = tracker.state
+    where = {index: k for k, (index, _) in enumerate(held)}
+    shares = {e["index"]: e.get("cost") for e in switched.log[-(len(recent) + 2):] if "index" in e}
+    state, poses, indices, backward, judged = switched, [], [], [], []
+    stopped = "window"
+    # the backward track keeps the switch's heading: its own heading recheck is off
+    tracker.settings = settings.updated({"heading": {"every": 0, "search_every": 0}})
+    try:
+        for index, depth in reversed(recent):
+            k = where.get(index)
+            if index < lowest or k is None or held[k][1] is None or shares.get(index) is None:
+                stopped = ("start or switch" if index < lowest else
+                           "yielded" if k is None or held[k][1] is None else "unscored")
+                break
+            state, x = tracker.advance(state, depth)
+            if x is None:
+                stopped = "lost"
+                break
+            forward = held[k][1]
+            apart = np.linalg.norm(np.asarray(tracker.body.joint_positions(x))
+                                   - np.asarray(tracker.body.joint_positions(forward)), axis=-1)
+            if float(apart.mean()) < settings.heading.retro_agree_m:
+                stopped = "agrees"
+                break
+            poses.append(x)
+            indices.append(index)
+            backward.append(state.log[-1]["cost"])
+            judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
+    finally:
+        tracker.settings = settings
+    entry = {"index": switch, "frames": len(indices), "stopped": stopped, "taken": False}
+    if indices:
+        e_back, e_forward = np.mean(judged, axis=0)
+        taken = bool(e_back <= e_forward * (1.0 + settings.heading.retro_margin))
+        entry.update(first=indices[-1], last=indices[0], taken=taken,
+                     energy_forward=round(float(e_forward), 1),
+                     energy_backward=round(float(e_back), 1),
+                     share_forward=round(float(np.mean([shares[j] for j in indices])), 4),
+                     share_backward=round(float(np.mean(backward)), 4))
+        if taken:
+            for index, x in zip(indices, poses):
+                held[where[index]] = (index, x)
+    tracker.state = switched.replace(retracks=switched.retracks + (entry,))
 
 
 def _stamp_indices(log, last) -> None:

@@ -65,6 +65,11 @@ class RendererSet:
             if r is not None:
                 r.set_observation(frame.observed, roi=frame.roi)
 
+    @property
+    def uploaded(self):
+        """The :class:`~.observe.Frame` uploaded last (None before the first)."""
+        return self._uploaded
+
     def at_tile(self, tile: int):
         """The candidate renderer at ``tile`` pixels (0 = :attr:`coarse`), scoring the last
         uploaded frame; made on the first call and owned by the set."""

@@ -254,6 +254,20 @@ class HeadingSettings:
     0.01: 9 of 38 frames taken better by more than 2 cm, 1 worse), but tracked, paired with
     the default, one sequence lost more than 5 points at margin 0.01 and at 0.05 (90_05
     seed 3, 05_20 seed 1), the rule set before (README, "Re-seating a limb").
+
+    ``retro_frames``: after a recheck turns the track (a heading switch), the frames before
+    the switch were tracked facing the wrong way too, since the evidence took frames to add
+    up: up to that many of them (0 = off) are tracked again backwards in time from the
+    turned pose, the heading recheck off on the way, until the backward track agrees with
+    the forward one (mean joint distance below ``retro_agree_m`` metres) or reaches the
+    last start or switch; the backward poses replace the forward ones unless their energy
+    summed over those frames, judged as the recheck judges (on ``judge_tile`` tiles,
+    without the motion prior), exceeds the forward poses' by more than the fraction
+    ``retro_margin``: before the switch the two headings explain the frames about equally
+    (else the recheck would have turned sooner), and the backward track's continuity with
+    the turned pose is the evidence (``heading_retracks`` in ``summary.json``).
+    The loop then holds each pose back that many frames before it yields it
+    (:func:`.loop.stream_poses`).
     """
 
     frames: int = 10
@@ -282,6 +296,9 @@ class HeadingSettings:
     reseat_every: int = 0
     reseat_margin: float = 0.01
     reseat_climbs: int = 1
+    retro_frames: int = 0
+    retro_agree_m: float = 0.05
+    retro_margin: float = 0.05
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -291,8 +308,8 @@ class HeadingSettings:
         _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
-                  "reseat_margin", allow_zero=True)
-        _positive(self, "votes", "twin_passes", "reseat_climbs")
+                  "reseat_margin", "retro_frames", "retro_margin", allow_zero=True)
+        _positive(self, "votes", "twin_passes", "reseat_climbs", "retro_agree_m")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "

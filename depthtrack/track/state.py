@@ -58,6 +58,13 @@ class TrackingState:
     reseats : tuple of dict
         Each time a limb was re-seated from the limb poses: ``frame``, ``limb``, energies
         (:func:`.reseat.recheck_reseat`).
+    retracks : tuple of dict
+        Each time the frames before a heading switch were tracked again backwards
+        (:attr:`HeadingSettings.retro_frames`): ``index`` of the switch, ``frames``,
+        ``first`` and ``last`` re-tracked frame, the mean energies ``energy_forward`` and
+        ``energy_backward`` the choice compares, the mean unexplained shares
+        ``share_forward`` and ``share_backward``, ``taken``, and why the backward track
+        stopped (``stopped``).
     """
 
     pose: np.ndarray | None = None
@@ -77,6 +84,7 @@ class TrackingState:
     limb_swaps: tuple = ()
     reaches: tuple = ()
     reseats: tuple = ()
+    retracks: tuple = ()
 
     @property
     def frame(self) -> int:

@@ -184,6 +184,12 @@ class Tracker:
         return Energy(self.renderers.coarse, frame.weight, self.smoothed, self.recorder,
                       self.settings.energy.pose_prior_std, self.settings.energy.twist_std)
 
+    def judge_energy(self) -> Energy:
+        """The energy without the motion prior of the frame uploaded last, on the tiles the
+        heading recheck judges on (:attr:`HeadingSettings.judge_tile`; 0 = the search's)."""
+        return self._energy(self.renderers.uploaded).on(
+            self.renderers.at_tile(self.settings.heading.judge_tile))
+
     def person_present(self, foreground) -> bool:
         """Whether a :class:`~depthtrack.detect.Foreground` holds a person."""
         return person_present(foreground, self.camera, self.settings)
@@ -381,6 +387,7 @@ class Tracker:
                 "limb_swaps": self._indexed(self.state.limb_swaps),
                 "reaches": self._indexed(self.state.reaches),
                 "reseats": self._indexed(self.state.reseats),
+                "heading_retracks": list(self.state.retracks),
                 "energies": [f.get("energy") for f in self.state.log]}
 
     def _indexed(self, events) -> list:
