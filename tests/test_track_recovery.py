@@ -253,11 +253,9 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
     # the two headings explain these frames alike (the mirrored even a little better):
     # continuity with the switch is what the re-track adds
     assert abs(retrack["energy_backward"] / retrack["energy_forward"] - 1.0) < 0.05
-    assert err.max() < 0.1                        # no frame left back to front, frame 0 included
-    # the forward track alone left them mirrored (the previous test's switch)
-    with Tracker(body, squat.camera, settings=alone) as tracker:
-        forward = _errors(tracker.track_sequence(squat, init_pose=x0).joints, truth)
-    assert forward[:switch["index"]].min() > 0.25
+    # no frame left back to front, frame 0 included (the previous test: without the
+    # re-track the same start is mirrored, 25 cm and more, until the switch)
+    assert err.max() < 0.1
 
 
 def test_limb_swapped_twins_exchange_one_pair_of_limbs_and_keep_the_trunk():

@@ -29,8 +29,10 @@ def stream_poses(tracker, frames, init_pose=None):
     :attr:`HeadingSettings.frames` frames; a live stream that must not wait sets
     ``complete_fraction`` and ``frames`` to 0)
     and while the segmentation misses the person (the track may yet be dropped, and
-    then those frames get no pose). Frames without a person get None; tracking
-    (re)starts with the automatic start on the next frame with a person.
+    then those frames get no pose), and with :attr:`HeadingSettings.retro_frames` that
+    many frames late (a heading switch may yet re-track them:
+    :func:`retrack_before_switch`). Frames without a person get None; tracking (re)starts
+    with the automatic start on the next frame with a person.
 
     Parameters
     ----------
@@ -181,8 +183,10 @@ def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> No
     The backward track runs with the heading recheck off (it must keep the heading the
     switch chose) through ``recent`` ``[(index, depth), ...]`` from the newest down, and
     stops at ``lowest`` (the start, or the frame after the last switch), at a pose already
-    yielded or dropped, at a lost track, or where it agrees with the forward track (mean
-    joint distance below ``retro_agree_m``: the forward track faced the right way there).
+    yielded or dropped, at a lost track, or where the forward track faces the way it does
+    (their trunks' left-to-right axes less than a quarter turn apart,
+    :func:`~depthtrack.evaluate.metrics.back_to_front`): from there back the forward track
+    had the switch's heading already, and its poses stay.
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
     exceeds the forward poses' on the same frames by more than the fraction
@@ -193,30 +197,32 @@ def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> No
     ``tracker.state.retracks`` gets an entry.
     The tracker's state is the switched forward state again afterwards.
     """
+    from ..evaluate.metrics import back_to_front
+
     settings = tracker.settings
     switched = tracker.state
     where = {index: k for k, (index, _) in enumerate(held)}
     shares = {e["index"]: e.get("cost") for e in switched.log[-(len(recent) + 2):] if "index" in e}
     state, poses, indices, backward, judged = switched, [], [], [], []
-    stopped = "window"
+    stopped = None
     # the backward track keeps the switch's heading: its own heading recheck is off
     tracker.settings = settings.updated({"heading": {"every": 0, "search_every": 0}})
     try:
         for index, depth in reversed(recent):
             k = where.get(index)
-            if index < lowest or k is None or held[k][1] is None or shares.get(index) is None:
-                stopped = ("start or switch" if index < lowest else
-                           "yielded" if k is None or held[k][1] is None else "unscored")
+            stopped = ("start or switch" if index < lowest else "yielded" if k is None else
+                       "no person" if held[k][1] is None else
+                       "unscored" if shares.get(index) is None else None)
+            if stopped:
                 break
             state, x = tracker.advance(state, depth)
             if x is None:
                 stopped = "lost"
                 break
             forward = held[k][1]
-            apart = np.linalg.norm(np.asarray(tracker.body.joint_positions(x))
-                                   - np.asarray(tracker.body.joint_positions(forward)), axis=-1)
-            if float(apart.mean()) < settings.heading.retro_agree_m:
-                stopped = "agrees"
+            joints = np.asarray(tracker.body.joint_positions(np.stack([x, forward])))
+            if not back_to_front(joints[1:], joints[:1])[0]:
+                stopped = "same heading"
                 break
             poses.append(x)
             indices.append(index)
@@ -224,7 +230,8 @@ def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> No
             judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
     finally:
         tracker.settings = settings
-    entry = {"index": switch, "frames": len(indices), "stopped": stopped, "taken": False}
+    entry = {"index": switch, "frames": len(indices), "stopped": stopped or "window",
+             "taken": False}
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)
         taken = bool(e_back <= e_forward * (1.0 + settings.heading.retro_margin))

@@ -258,9 +258,9 @@ class HeadingSettings:
     ``retro_frames``: after a recheck turns the track (a heading switch), the frames before
     the switch were tracked facing the wrong way too, since the evidence took frames to add
     up: up to that many of them (0 = off) are tracked again backwards in time from the
-    turned pose, the heading recheck off on the way, until the backward track agrees with
-    the forward one (mean joint distance below ``retro_agree_m`` metres) or reaches the
-    last start or switch; the backward poses replace the forward ones unless their energy
+    turned pose, the heading recheck off on the way, until the forward track faces the way
+    the backward one does (their trunks less than a quarter turn apart) or the backward
+    track reaches the last start or switch; the backward poses replace the forward ones unless their energy
     summed over those frames, judged as the recheck judges (on ``judge_tile`` tiles,
     without the motion prior), exceeds the forward poses' by more than the fraction
     ``retro_margin``: before the switch the two headings explain the frames about equally
@@ -297,7 +297,6 @@ class HeadingSettings:
     reseat_margin: float = 0.01
     reseat_climbs: int = 1
     retro_frames: int = 0
-    retro_agree_m: float = 0.05
     retro_margin: float = 0.05
 
     def __post_init__(self):
@@ -309,7 +308,7 @@ class HeadingSettings:
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
                   "reseat_margin", "retro_frames", "retro_margin", allow_zero=True)
-        _positive(self, "votes", "twin_passes", "reseat_climbs", "retro_agree_m")
+        _positive(self, "votes", "twin_passes", "reseat_climbs")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
