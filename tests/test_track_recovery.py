@@ -241,11 +241,21 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
     truth = squat.joints
     x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
     alone = TrackerSettings().updated({"search": {"untwist": []}})
-    retro = alone.updated({"heading": {"retro_frames": 15}})
+    retro = alone.updated({"heading": {"retro_frames": 10}})
+    pulled, poses = [], {}
+
+    def source():
+        for j in range(len(squat)):
+            pulled.append(j)
+            yield squat.depth(j)
     with Tracker(body, squat.camera, settings=retro) as tracker:
-        result = tracker.track_sequence(squat, init_pose=x0)
+        for i, x in tracker.stream(source(), init_pose=x0):
+            # each pose is held back ten frames (a switch may still re-track it), no more
+            assert len(pulled) == min(i + 11, len(squat))
+            poses[i] = x
         info = tracker.describe()
-    err = _errors(result.joints, truth)
+    assert sorted(poses) == list(range(len(squat)))
+    err = _errors(body.joint_positions(np.array([poses[i] for i in range(len(squat))])), truth)
     (switch,) = info["heading_switches"]
     (retrack,) = info["heading_retracks"]
     assert retrack["index"] == switch["index"] and retrack["taken"]

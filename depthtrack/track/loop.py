@@ -115,8 +115,8 @@ def stream_poses(tracker, frames, init_pose=None):
         _stamp_indices(tracker.state.log, i)
         # frames of a streak without a person stay held: a dropped track drops them too
         # and the last retro_frames poses, which a heading switch may yet re-track
-        keep = len(held) - max(tracker.state.absent if tracker.state.pose is not None else 0,
-                               retro)
+        keep = max(len(held) - max(tracker.state.absent if tracker.state.pose is not None
+                                   else 0, retro), 0)
         yield from held[:keep]
         del held[:keep]
     yield from held
