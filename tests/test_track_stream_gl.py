@@ -62,7 +62,7 @@ def test_track_stream_yields_each_frame_before_reading_the_next(frames):
 
     seen = []
     for f in track_stream(source(), CAMERA, body=body, method="hc", segmenter=_segment,
-                          settings=TrackerSettings(heading={"frames": 0},
+                          settings=TrackerSettings(heading={"frames": 0, "retro_frames": 0},
                                                    start={"complete_fraction": 0.0})):
         seen.append((f.index, len(pulled)))
         err = np.linalg.norm(f.joints - body.joint_positions(truth[f.index]), axis=-1)

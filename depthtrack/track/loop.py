@@ -27,7 +27,7 @@ def stream_poses(tracker, frames, init_pose=None):
     (it reads the next :attr:`StartSettings.complete_frames` frames to see whether the
     person is still walking into view, and the front/back check tracks the next
     :attr:`HeadingSettings.frames` frames; a live stream that must not wait sets
-    ``complete_fraction`` and ``frames`` to 0)
+    ``complete_fraction``, ``frames`` and ``retro_frames`` to 0)
     and while the segmentation misses the person (the track may yet be dropped, and
     then those frames get no pose), and with :attr:`HeadingSettings.retro_frames` that
     many frames late (a heading switch may yet re-track them:

@@ -257,7 +257,7 @@ class HeadingSettings:
 
     ``retro_frames``: after a recheck turns the track (a heading switch), the frames before
     the switch were tracked facing the wrong way too, since the evidence took frames to add
-    up: up to that many of them (0 = off) are tracked again backwards in time from the
+    up: up to that many of them (default 50 since 2026-11-27; 0 = off) are tracked again backwards in time from the
     turned pose, the heading recheck off on the way, until the forward track faces the way
     the backward one does (their trunks less than a quarter turn apart) or the backward
     track reaches the last start or switch; the backward poses replace the forward ones unless their energy
@@ -296,7 +296,7 @@ class HeadingSettings:
     reseat_every: int = 0
     reseat_margin: float = 0.01
     reseat_climbs: int = 1
-    retro_frames: int = 0
+    retro_frames: int = 50
     retro_margin: float = 0.05
 
     def __post_init__(self):
