@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import JOINT_INDEX
+from ..body.facing import TRUNK_SIDES, back_to_front  # noqa: F401 (part of this module's API)
 from .fit import FIT_KEYS
 
 #: A joint closer than this to its ground truth counts as "within" (metres).
@@ -163,38 +164,6 @@ def frames_per_second(frames: int, seconds) -> float:
         return float("nan")
     seconds = float(seconds)
     return float(frames) / seconds if np.isfinite(seconds) and seconds > 0 else float("nan")
-
-
-#: The contract joint pairs whose left-to-right vectors, summed, are a trunk's sideways axis.
-TRUNK_SIDES = (("l_hip", "r_hip"), ("l_shoulder", "r_shoulder"))
-
-
-def back_to_front(estimated, truth):
-    """Which frames a track has back to front: its trunk facing away from the true one.
-
-    A body seen from the wrong side is the tracker's costliest mistake (every joint's side
-    exchanged; the hips and shoulders a trunk's width off while head, neck and pelvis are
-    right), and the one a depth image hides best. The trunk's sideways axis is the sum of
-    the left-to-right vectors of the hips and the shoulders (:data:`TRUNK_SIDES`); a frame is
-    back to front when the tracked axis points against the true one (their angle over 90
-    degrees: the trunk turned more than a quarter turn about its long axis, or mirrored).
-
-    Parameters
-    ----------
-    estimated, truth : (F, 15, 3) float
-        Contract joints; NaN where unknown.
-
-    Returns
-    -------
-    (F,) float
-        1.0 back to front, 0.0 not, NaN where either side's joints are unknown.
-    """
-    def sideways(joints):
-        j = np.asarray(joints, dtype=np.float64)
-        return sum(j[:, JOINT_INDEX[r]] - j[:, JOINT_INDEX[lft]] for lft, r in TRUNK_SIDES)
-
-    dot = np.sum(sideways(estimated) * sideways(truth), axis=-1)
-    return np.where(np.isfinite(dot), (dot < 0).astype(np.float64), np.nan)
 
 
 def trunk_twist(joints):

@@ -13,6 +13,7 @@ import itertools
 
 import numpy as np
 
+from ..body.facing import back_to_front
 from .heading import settle_heading
 from .observe import as_depth, person_present, visible_area
 from .settings import TrackerSettings
@@ -185,7 +186,7 @@ def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> No
     stops at ``lowest`` (the start, or the frame after the last switch), at a pose already
     yielded or dropped, at a lost track, or where the forward track faces the way it does
     (their trunks' left-to-right axes less than a quarter turn apart,
-    :func:`~depthtrack.evaluate.metrics.back_to_front`): from there back the forward track
+    :func:`~depthtrack.body.facing.back_to_front`): from there back the forward track
     had the switch's heading already, and its poses stay.
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
@@ -197,8 +198,6 @@ def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> No
     ``tracker.state.retracks`` gets an entry.
     The tracker's state is the switched forward state again afterwards.
     """
-    from ..evaluate.metrics import back_to_front
-
     settings = tracker.settings
     switched = tracker.state
     where = {index: k for k, (index, _) in enumerate(held)}
