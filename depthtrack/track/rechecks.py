@@ -49,7 +49,7 @@ def recheck_stage(tracker, state, energy, frame, x):
     judge_tile = s.heading.judge_tile
 
     def judge(poses):                    # asked for only where the recheck runs
-        return energy.without_prior().on(tracker.renderers.at_tile(judge_tile))(poses)
+        return tracker.judge_energy()(poses)
     with recorder.timed("heading"):
         y, changes, turned = recheck_heading(
             state, x, refit, lambda pose: recheck_twins(tracker.body, s, bare, pose), pixels, s,

@@ -288,7 +288,7 @@ class Tracker:
         scores = {"energy": bare.one(x) / pixels}
         h = s.heading
         if h.judge_start and h.judge_tile:
-            scores["judged"] = bare.on(self.renderers.at_tile(h.judge_tile)).one(x) / pixels
+            scores["judged"] = self.judge_energy().one(x) / pixels
         return state, x.copy(), scores
 
     def track_through(self, state, depths):
