@@ -36,3 +36,29 @@ def back_to_front(estimated, truth):
 
     dot = np.sum(sideways(estimated) * sideways(truth), axis=-1)
     return np.where(np.isfinite(dot), (dot < 0).astype(np.float64), np.nan)
+
+
+def sides_exchanged(estimated, truth, order):
+    """Which frames have a limb pair's sides exchanged: ``estimated``'s joints that ``order``
+    moves lie nearer ``truth``'s with left and right exchanged than as they are (the legs
+    crossed over, each knee and ankle where the other side's are).
+
+    Parameters
+    ----------
+    estimated, truth : (F, 15, 3) float
+        Contract joints.
+    order : sequence of int
+        Contract joint order with the pair's sides exchanged (e.g. ``LEGS_SWAPPED`` of
+        :mod:`depthtrack.track.heading`); the joints it keeps in place do not count.
+
+    Returns
+    -------
+    (F,) bool
+    """
+    order = np.asarray(order)
+    moved = order != np.arange(len(order))
+    est = np.asarray(estimated, dtype=np.float64)
+    tru = np.asarray(truth, dtype=np.float64)
+    as_is = np.linalg.norm(est[:, moved] - tru[:, moved], axis=-1).sum(axis=-1)
+    exchanged = np.linalg.norm(est[:, order][:, moved] - tru[:, moved], axis=-1).sum(axis=-1)
+    return exchanged < as_is

@@ -13,8 +13,8 @@ import itertools
 
 import numpy as np
 
-from ..body.facing import back_to_front
-from .heading import settle_heading
+from ..body.facing import back_to_front, sides_exchanged
+from .heading import LIMB_SWAPS, settle_heading
 from .observe import as_depth, person_present, visible_area
 from .settings import TrackerSettings
 from .state import TrackedFrame
@@ -31,8 +31,8 @@ def stream_poses(tracker, frames, init_pose=None):
     ``complete_fraction``, ``frames`` and ``retro_frames`` to 0)
     and while the segmentation misses the person (the track may yet be dropped, and
     then those frames get no pose), and with :attr:`HeadingSettings.retro_frames` that
-    many frames late (a heading switch may yet re-track them:
-    :func:`retrack_before_switch`). Frames without a person get None; tracking (re)starts
+    many frames late (a correction, :attr:`HeadingSettings.retro_after`, may yet re-track
+    them: :func:`retrack_before_correction`). Frames without a person get None; tracking (re)starts
     with the automatic start on the next frame with a person.
 
     Parameters
@@ -46,8 +46,8 @@ def stream_poses(tracker, frames, init_pose=None):
     pending = collections.deque()   # frames read ahead and given back
     held = []              # (index, pose) not yet yielded: the track may still drop them
     retro = s.heading.retro_frames
-    recent = collections.deque(maxlen=max(retro, 1))   # (index, depth) a switch may re-track
-    lowest = 0             # the first frame a switch may re-track: the start, or past a switch
+    recent = collections.deque(maxlen=max(retro, 1))   # (index, depth) a correction may re-track
+    lowest = 0             # the first frame a re-track may reach: the start, or past the last one
 
     def take(n):
         out = [pending.popleft() for _ in range(min(n, len(pending)))]
@@ -64,11 +64,11 @@ def stream_poses(tracker, frames, init_pose=None):
             held.append((i, x))
             recent.append((i, depth))
         elif tracker.state.pose is not None:
-            switches = len(tracker.state.heading_switches)
+            before = tracker.state
             _advance_into(tracker, held, i, depth)
-            if retro and len(tracker.state.heading_switches) > switches and \
-                    tracker.state.pose is not None:
-                retrack_before_switch(tracker, held, recent, lowest, i)
+            kind = new_correction(before, tracker.state, s.heading.retro_after) if retro else None
+            if kind is not None and tracker.state.pose is not None:
+                retrack_before_correction(tracker, held, recent, lowest, i, kind)
                 lowest = i + 1
             recent.append((i, depth))
         else:
@@ -115,7 +115,7 @@ def stream_poses(tracker, frames, init_pose=None):
                 held.extend(started)
         _stamp_indices(tracker.state.log, i)
         # frames of a streak without a person stay held: a dropped track drops them too
-        # and the last retro_frames poses, which a heading switch may yet re-track
+        # and the last retro_frames poses, which a correction may yet re-track
         keep = max(len(held) - max(tracker.state.absent if tracker.state.pose is not None
                                    else 0, retro), 0)
         yield from held[:keep]
@@ -177,35 +177,87 @@ def _track_back(tracker, state, early, first):
     return [(first + k, p) for k, p in enumerate(back[1][::-1])], events
 
 
-def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> None:
-    """After a heading switch on frame ``switch``: the frames before it tracked again
-    backwards from the turned pose (:attr:`HeadingSettings.retro_frames`).
+#: Which corrections :func:`new_correction` reports, first the one a frame's re-track
+#: follows when it has several: a recovery replaces the whole pose.
+CORRECTION_ORDER = ("heading", "recovery", "limbs")
 
-    The backward track runs with the heading recheck off (it must keep the heading the
-    switch chose) through ``recent`` ``[(index, depth), ...]`` from the newest down, and
-    stops at ``lowest`` (the start, or the frame after the last switch), at a pose already
-    yielded or dropped, at a lost track, or where the forward track faces the way it does
-    (their trunks' left-to-right axes less than a quarter turn apart,
-    :func:`~depthtrack.body.facing.back_to_front`): from there back the forward track
-    had the switch's heading already, and its poses stay.
+#: What the backward track after each kind of correction runs without: the recheck that
+#: made the correction (it must keep the correction's choice; after a limb swap or a
+#: recovery the heading recheck too: the forward track's own checks found nothing there).
+RETRO_OFF = {"heading": {"every": 0, "search_every": 0},
+             "limbs": {"every": 0, "search_every": 0, "limb_every": 0},
+             "recovery": {"every": 0, "search_every": 0, "limb_every": 0}}
+
+#: Mean joint distance (m) under which a backward track after a recovery agrees with the
+#: forward one: from there back the forward track was found already.
+RETRO_AGREE_M = 0.05
+
+#: ``stopped`` of a re-track entry where the forward track had the correction already.
+STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "agrees"}
+
+
+def _corrections(state) -> dict:
+    """How many corrections of each kind :data:`CORRECTION_ORDER` ``state`` has had: a
+    recovery counts where a loss closed with the track found again."""
+    return {"heading": len(state.heading_switches), "limbs": len(state.limb_swaps),
+            "recovery": sum(r.get("frames_to_recover") is not None for r in state.recoveries)}
+
+
+def new_correction(before, after, kinds):
+    """The kind of correction (of ``kinds``, :attr:`HeadingSettings.retro_after`) that
+    ``after`` has and ``before`` had not -- the first in :data:`CORRECTION_ORDER` -- or None."""
+    was, now = _corrections(before), _corrections(after)
+    return next((k for k in CORRECTION_ORDER if k in kinds and now[k] > was[k]), None)
+
+
+def _forward_agrees(kind, detail, backward, forward) -> bool:
+    """Whether the forward track's joints ``forward (15, 3)`` already have what the
+    correction of ``kind`` gave the backward track's ``backward (15, 3)``: the heading
+    (trunks less than a quarter turn apart), the limb pair ``detail``'s sides, or (after a
+    recovery) the pose, within :data:`RETRO_AGREE_M` on average."""
+    b, f = backward[None], forward[None]
+    if kind == "heading":
+        return not back_to_front(f, b)[0]
+    if kind == "limbs":
+        return not sides_exchanged(f, b, LIMB_SWAPS[detail])[0]
+    return float(np.mean(np.linalg.norm(f - b, axis=-1))) < RETRO_AGREE_M
+
+
+def retrack_before_correction(tracker, held, recent, lowest: int, switch: int,
+                          kind: str = "heading") -> None:
+    """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``switch``: the
+    frames before it tracked again backwards from the corrected pose
+    (:attr:`HeadingSettings.retro_frames`, ``retro_after``).
+
+    The backward track runs with the recheck that made the correction off (it must keep the
+    correction's choice, :data:`RETRO_OFF`) through ``recent`` ``[(index, depth), ...]``
+    from the newest down, and stops at ``lowest`` (the start, or the frame after the last
+    re-tracked correction), at a pose already yielded or dropped, at a lost track, or where
+    the forward track already has what the correction gave (:func:`_forward_agrees`: after a
+    heading switch, faces the way the backward track does, their trunks' left-to-right axes
+    less than a quarter turn apart, :func:`~depthtrack.body.facing.back_to_front`; after a
+    limb swap, has the swapped limbs on the backward track's sides,
+    :func:`~depthtrack.body.facing.sides_exchanged`; after a recovery, agrees with it): from
+    there back the forward track had it already, and its poses stay.
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
     exceeds the forward poses' on the same frames by more than the fraction
-    ``retro_margin``. The switch is the evidence: frames before it where one heading
-    explained the image clearly better would have turned the track sooner, so there the two
-    score alike, and the backward track's continuity with the turned pose is what tells
-    them apart; the margin only refuses a backward track that lost the person. Either way
-    ``tracker.state.retracks`` gets an entry.
-    The tracker's state is the switched forward state again afterwards.
+    ``retro_margin``. The correction is the evidence: frames before it where one heading
+    (or one side for the limbs) explained the image clearly better would have been corrected
+    sooner, so there the two score alike, and the backward track's continuity with the
+    corrected pose is what tells them apart; the margin only refuses a backward track that
+    lost the person. Either way ``tracker.state.retracks`` gets an entry.
+    The tracker's state is the corrected forward state again afterwards: the forward track
+    goes on as it would have.
     """
     settings = tracker.settings
     switched = tracker.state
+    detail = switched.limb_swaps[-1]["limbs"] if kind == "limbs" else None
     where = {index: k for k, (index, _) in enumerate(held)}
     shares = {e["index"]: e.get("cost") for e in switched.log[-(len(recent) + 2):] if "index" in e}
     state, poses, indices, backward, judged = switched, [], [], [], []
     stopped = None
-    # the backward track keeps the switch's heading: its own heading recheck is off
-    tracker.settings = settings.updated({"heading": {"every": 0, "search_every": 0}})
+    tracker.settings = settings.updated({"heading": RETRO_OFF[kind]})
     try:
         for index, depth in reversed(recent):
             k = where.get(index)
@@ -220,8 +272,8 @@ def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> No
                 break
             forward = held[k][1]
             joints = np.asarray(tracker.body.joint_positions(np.stack([x, forward])))
-            if not back_to_front(joints[1:], joints[:1])[0]:
-                stopped = "same heading"
+            if _forward_agrees(kind, detail, joints[0], joints[1]):
+                stopped = STOP_LABELS[kind]
                 break
             poses.append(x)
             indices.append(index)
@@ -229,7 +281,8 @@ def retrack_before_switch(tracker, held, recent, lowest: int, switch: int) -> No
             judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
     finally:
         tracker.settings = settings
-    entry = {"index": switch, "frames": len(indices), "stopped": stopped or "window",
+    entry = {"kind": kind, "index": switch, "frames": len(indices),
+             "stopped": stopped or "window",
              "taken": False}
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)

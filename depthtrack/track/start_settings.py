@@ -137,6 +137,8 @@ class StartSettings:
 START_TWINS = ("turned", "swapped", "search")
 #: How the swapped twins may be fitted (:func:`.heading.swapped_twins`; ``twin_starts``).
 TWIN_STARTS = ("turned", "rest")
+#: The corrections whose earlier frames :attr:`HeadingSettings.retro_after` may re-track.
+RETRO_KINDS = ("heading", "limbs", "recovery")
 #: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
 START_SCORES = ("energy", "unexplained")
 
@@ -268,6 +270,15 @@ class HeadingSettings:
     the turned pose is the evidence (``heading_retracks`` in ``summary.json``).
     The loop then holds each pose back that many frames before it yields it
     (:func:`.loop.stream_poses`).
+
+    ``retro_after``: which corrections have the frames before them re-tracked so:
+    ``"heading"`` (a heading switch, as above), ``"limbs"`` (a limb swap,
+    :func:`.heading.recheck_limb_sides`: the backward track runs with the heading and limb
+    rechecks off and stops where the forward track's swapped limbs already lie on the sides
+    the backward track's do) and ``"recovery"`` (a lost track found again,
+    :func:`.judge.judge_frame`: rechecks off, stops where the two tracks agree, mean joint
+    distance under 5 cm). Each re-track is judged by the same energy rule
+    (``retracks`` in ``summary.json``, with its ``kind``).
     """
 
     frames: int = 10
@@ -298,6 +309,7 @@ class HeadingSettings:
     reseat_climbs: int = 1
     retro_frames: int = 50
     retro_margin: float = 0.05
+    retro_after: tuple = ("heading",)
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -314,6 +326,10 @@ class HeadingSettings:
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
                                                    f"or false, not {self.judge_start!r}")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
+        object.__setattr__(self, "retro_after", tuple(self.retro_after))
+        _check(set(self.retro_after) <= set(RETRO_KINDS),
+               f"HeadingSettings.retro_after must be a choice of {', '.join(RETRO_KINDS)}, "
+               f"not {self.retro_after!r}")
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
                f"HeadingSettings.twin_starts must be a non-empty choice of "
                f"{', '.join(TWIN_STARTS)}, not {self.twin_starts!r}")

@@ -59,8 +59,9 @@ class TrackingState:
         Each time a limb was re-seated from the limb poses: ``frame``, ``limb``, energies
         (:func:`.reseat.recheck_reseat`).
     retracks : tuple of dict
-        Each time the frames before a heading switch were tracked again backwards
-        (:attr:`HeadingSettings.retro_frames`): ``index`` of the switch, ``frames``,
+        Each time the frames before a correction were tracked again backwards
+        (:attr:`HeadingSettings.retro_frames`, ``retro_after``): its ``kind``
+        (``"heading"``, ``"limbs"``, ``"recovery"``), ``index`` of the correction, ``frames``,
         ``first`` and ``last`` re-tracked frame, the mean energies ``energy_forward`` and
         ``energy_backward`` the choice compares, the mean unexplained shares
         ``share_forward`` and ``share_backward``, ``taken``, and why the backward track

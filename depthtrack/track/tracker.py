@@ -387,7 +387,9 @@ class Tracker:
                 "limb_swaps": self._indexed(self.state.limb_swaps),
                 "reaches": self._indexed(self.state.reaches),
                 "reseats": self._indexed(self.state.reseats),
-                "heading_retracks": list(self.state.retracks),
+                # the heading switches' re-tracks, as before there were other kinds
+                "heading_retracks": [r for r in self.state.retracks if r["kind"] == "heading"],
+                "retracks": list(self.state.retracks),
                 "energies": [f.get("energy") for f in self.state.log]}
 
     def _indexed(self, events) -> list:
