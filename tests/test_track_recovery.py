@@ -323,18 +323,56 @@ def test_a_start_with_the_legs_crossed_is_uncrossed_while_tracking(squat):
     def leg_errors(joints):
         return np.linalg.norm(np.asarray(joints)[:, legs] - truth[:, legs], axis=-1).mean(axis=-1)
 
-    with Tracker(body, squat.camera, settings=TrackerSettings()) as tracker:
+    assert leg_errors(body.joint_positions(x0)[None])[0] > 0.15   # the start's legs crossed
+    # with the frames before the swap re-tracked backwards from it (retro_after)
+    retro = TrackerSettings(heading={"retro_after": ["heading", "limbs"]})
+    with Tracker(body, squat.camera, settings=retro) as tracker:
         result = tracker.track_sequence(squat, init_pose=x0)
-        swaps = tracker.describe()["limb_swaps"]
+        info = tracker.describe()
+    swaps = info["limb_swaps"]
     err = leg_errors(result.joints)
-    assert err[0] > 0.15                              # the start has the legs crossed
     assert swaps and swaps[0]["limbs"] == "legs"
     assert swaps[0]["frame"] <= 2 * TrackerSettings().heading.limb_every
-    assert err[swaps[-1]["frame"]:].max() < 0.1
+    # the forward track is right from the swap on, and the re-track puts the frames before
+    # it right too, the start's frame included
+    retrack = info["retracks"][0]
+    assert retrack["kind"] == "limbs" and retrack["index"] == swaps[0]["index"]
+    assert retrack["taken"] and retrack["first"] == 0
+    assert info["heading_retracks"] == [r for r in info["retracks"] if r["kind"] == "heading"]
+    assert err.max() < 0.1
     off = TrackerSettings(heading={"limb_every": 0})
     with Tracker(body, squat.camera, settings=off) as tracker:
         stuck = leg_errors(tracker.track_sequence(squat, init_pose=x0).joints)
     assert stuck[-5:].min() > 0.15
+
+
+def test_a_correction_is_told_by_its_kind_and_the_forward_track_by_what_it_has():
+    from depthtrack.track.loop import _forward_agrees, new_correction
+    before = TrackingState(recoveries=({"frame": 1, "frames_to_recover": 0},))
+    limbs = before.replace(limb_swaps=({"frame": 3, "limbs": "legs"},))
+    assert new_correction(before, limbs, ("heading", "limbs")) == "limbs"
+    assert new_correction(before, limbs, ("heading", "recovery")) is None
+    # a loss still open is no correction; one closed with the track found is
+    opened = before.replace(lost={"frame": 4})
+    assert new_correction(before, opened, ("recovery",)) is None
+    found = before.replace(recoveries=before.recoveries + ({"frame": 4, "frames_to_recover": 2},))
+    given_up = before.replace(recoveries=before.recoveries + ({"frame": 4,
+                                                               "frames_to_recover": None},))
+    assert new_correction(before, found.replace(limb_swaps=limbs.limb_swaps),
+                          ("limbs", "recovery")) == "recovery"
+    assert new_correction(before, given_up, ("recovery",)) is None
+    body = BodyModel.default(height=1.75)
+    x = np.zeros(48)
+    x[2] = 3.0
+    x[POSE_INDEX["l_hip_rx"]] = -0.8                 # the left thigh forward
+    joints = np.asarray(body.joint_positions(x))
+    crossed = joints[LEGS_SWAPPED]
+    assert _forward_agrees("limbs", "legs", joints, joints + 0.01)
+    assert not _forward_agrees("limbs", "legs", joints, crossed)
+    assert _forward_agrees("heading", None, joints, crossed)       # the trunk is the same
+    assert not _forward_agrees("heading", None, joints, joints[SIDES_SWAPPED])
+    assert _forward_agrees("recovery", None, joints, joints + 0.02)
+    assert not _forward_agrees("recovery", None, joints, crossed)
 
 
 def test_flip_search_asks_for_the_other_heading_and_switches_on_a_clear_lead_only():
