@@ -309,7 +309,7 @@ class HeadingSettings:
     reseat_climbs: int = 1
     retro_frames: int = 50
     retro_margin: float = 0.05
-    retro_after: tuple = ("heading",)
+    retro_after: tuple = ("heading", "limbs", "recovery")
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
