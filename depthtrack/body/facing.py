@@ -1,5 +1,6 @@
-"""Which way a body faces, from its contract joints (a metric of the evaluation, and the
-tracker's test of whether two tracks face the same way)."""
+"""Which way a body faces and which side its limbs are on, from its contract joints (a
+metric of the evaluation, and the tracker's test of whether two tracks face the same way or
+have a limb pair's sides exchanged)."""
 from __future__ import annotations
 
 import numpy as np
