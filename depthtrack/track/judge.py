@@ -96,7 +96,8 @@ def judge_frame(state, cost: float, reason, settings, found=None):
 
 
 def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained", off=None):
-    """Global search on ``frame``; taken when it explains more than the tracked ``x``.
+    """Global search on ``frame``; taken when it explains more than the tracked ``x``
+    (:attr:`JudgeSettings.recover_by`: a lower unexplained share, or a lower energy).
 
     ``previous (48,)``: the last frame's pose, whose heading and body axis the search prefers
     -- unless ``reason`` is ``"proposals"``: then the track's orientation is what is in
@@ -130,6 +131,9 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
         p = tracker.settings.propose
         off_y, _ = proposal_check(tracker, frame, y, 0)
         better = off_y < off and y_cost < cost + p.accept_margin
+    elif tracker.settings.judge.recover_by == "energy":
+        e_y, e_x = tracker.judge_energy()(np.stack([y, x]))
+        better = bool(e_y < e_x)
     else:
         better = y_cost < cost
     if better:

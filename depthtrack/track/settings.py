@@ -233,16 +233,30 @@ class JudgeSettings:
     search runs on every frame; a loss that lasts ``max_lost_frames`` frames is closed
     unrecovered (the scene has changed: the recent shares start afresh). Every loss is
     reported (:attr:`TrackingState.recoveries`, ``summary.json``).
+
+    ``recover_by``: what a recovery's pose must beat the tracked pose on to replace it
+    (where the track was lost by its unexplained share; a loss the proposals found is
+    judged by them, :attr:`ProposalSettings.accept_margin`): ``"unexplained"``, a lower
+    unexplained share, or ``"energy"``, a lower energy without the motion prior on the
+    heading recheck judge's tiles (:attr:`HeadingSettings.judge_tile`), which also counts
+    the body drawn where the image has no person.
     """
 
     lost_ratio: float = 1.6
     lost_margin: float = 0.15
     window: int = 8
     max_lost_frames: int = 10
+    recover_by: str = "unexplained"
 
     def __post_init__(self):
         _positive(self, "lost_ratio", "window", "max_lost_frames")
         _positive(self, "lost_margin", allow_zero=True)
+        _check(self.recover_by in RECOVER_BY, f"JudgeSettings.recover_by must be one of "
+                                              f"{', '.join(RECOVER_BY)}, not {self.recover_by!r}")
+
+
+#: What a recovery's pose is judged by (:attr:`JudgeSettings.recover_by`).
+RECOVER_BY = ("unexplained", "energy")
 
 
 @dataclass(frozen=True)
