@@ -425,6 +425,31 @@ def test_loss_bookkeeping_opens_closes_and_gives_up():
     assert changes["recoveries"][-1]["frames_to_recover"] is None and flags["reset"]
 
 
+def test_a_recovery_must_beat_the_tracked_pose_on_what_recover_by_names(squat):
+    """The search's pose replaces the tracked one only where it is better by the figure
+    :attr:`JudgeSettings.recover_by` names. The tracked pose here is the previous frame's
+    true pose, said to leave everything unexplained: the unexplained rule takes the
+    search's pose; the energy rule sees the tracked pose explain the frame better (it is
+    nearly right) and keeps it."""
+    from depthtrack.track.judge import recover
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    f = 8
+    before = fit_pose_to_joints(body, truth[f - 1])
+
+    def recovered(rule, x, cost):
+        settings = TrackerSettings(judge={"recover_by": rule})
+        with Tracker(body, squat.camera, settings=settings) as tracker:
+            state, _, _ = tracker.start(tracker.state, squat.depth(f - 1), pose=before)
+            frame, _ = tracker._observe(state, squat.depth(f), predicted=before)
+            return recover(tracker, tracker._energy(frame), frame, before, x, cost)
+    taken, y, y_cost = recovered("unexplained", before, 1.0)
+    assert taken and y_cost < 1.0 and not np.allclose(y, before)
+    kept, z, z_cost = recovered("energy", before, 1.0)
+    assert not kept and z is before and z_cost == 1.0
+    assert _errors(body.joint_positions(before[None]), truth[f:f + 1])[0] < 0.05
+
+
 def test_a_lost_track_is_recovered_within_five_frames_and_reported(squat):
     body = BodyModel.default(height=1.75)
     truth = squat.joints
