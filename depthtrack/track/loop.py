@@ -223,9 +223,9 @@ def _forward_agrees(kind, detail, backward, forward) -> bool:
     return float(np.mean(np.linalg.norm(f - b, axis=-1))) < RETRO_AGREE_M
 
 
-def retrack_before_correction(tracker, held, recent, lowest: int, switch: int,
-                          kind: str = "heading") -> None:
-    """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``switch``: the
+def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
+                              kind: str = "heading") -> None:
+    """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``at``: the
     frames before it tracked again backwards from the corrected pose
     (:attr:`HeadingSettings.retro_frames`, ``retro_after``).
 
@@ -251,11 +251,11 @@ def retrack_before_correction(tracker, held, recent, lowest: int, switch: int,
     goes on as it would have.
     """
     settings = tracker.settings
-    switched = tracker.state
-    detail = switched.limb_swaps[-1]["limbs"] if kind == "limbs" else None
+    corrected = tracker.state
+    detail = corrected.limb_swaps[-1]["limbs"] if kind == "limbs" else None
     where = {index: k for k, (index, _) in enumerate(held)}
-    shares = {e["index"]: e.get("cost") for e in switched.log[-(len(recent) + 2):] if "index" in e}
-    state, poses, indices, backward, judged = switched, [], [], [], []
+    shares = {e["index"]: e.get("cost") for e in corrected.log[-(len(recent) + 2):] if "index" in e}
+    state, poses, indices, backward, judged = corrected, [], [], [], []
     stopped = None
     tracker.settings = settings.updated({"heading": RETRO_OFF[kind]})
     try:
@@ -281,9 +281,8 @@ def retrack_before_correction(tracker, held, recent, lowest: int, switch: int,
             judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
     finally:
         tracker.settings = settings
-    entry = {"kind": kind, "index": switch, "frames": len(indices),
-             "stopped": stopped or "window",
-             "taken": False}
+    entry = {"kind": kind, "index": at, "frames": len(indices),
+             "stopped": stopped or "window", "taken": False}
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)
         taken = bool(e_back <= e_forward * (1.0 + settings.heading.retro_margin))
@@ -295,7 +294,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, switch: int,
         if taken:
             for index, x in zip(indices, poses):
                 held[where[index]] = (index, x)
-    tracker.state = switched.replace(retracks=switched.retracks + (entry,))
+    tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
 
 
 def _stamp_indices(log, last) -> None:
