@@ -184,9 +184,10 @@ CORRECTION_ORDER = ("heading", "recovery", "limbs")
 #: What the backward track after each kind of correction runs without: the recheck that
 #: made the correction (it must keep the correction's choice; after a limb swap or a
 #: recovery the heading recheck too: the forward track's own checks found nothing there).
-RETRO_OFF = {"heading": {"every": 0, "search_every": 0},
-             "limbs": {"every": 0, "search_every": 0, "limb_every": 0},
-             "recovery": {"every": 0, "search_every": 0, "limb_every": 0}}
+_HEADING_OFF = {"every": 0, "search_every": 0}
+RETRO_OFF = {"heading": _HEADING_OFF,
+             "limbs": {**_HEADING_OFF, "limb_every": 0},
+             "recovery": {**_HEADING_OFF, "limb_every": 0}}
 
 #: Mean joint distance (m) under which a backward track after a recovery agrees with the
 #: forward one: from there back the forward track was found already.
