@@ -263,12 +263,46 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
     (retrack,) = info["heading_retracks"]
     assert retrack["index"] == switch["index"] and retrack["taken"]
     assert retrack["first"] == 0 and retrack["last"] == switch["index"] - 1
+    assert retrack["frames_taken"] == retrack["frames"] and retrack["first_taken"] == 0
     # the two headings explain these frames alike (the mirrored even a little better):
     # continuity with the switch is what the re-track adds
     assert abs(retrack["energy_backward"] / retrack["energy_forward"] - 1.0) < 0.05
     # no frame left back to front, frame 0 included (the previous test: without the
     # re-track the same start is mirrored, 25 cm and more, until the switch)
     assert err.max() < 0.1
+
+
+def test_a_backward_track_gives_the_frames_up_to_where_it_stopped_doing_as_well():
+    from depthtrack.track.loop import best_prefix
+    held = [[1.0, 1.0]] * 6
+    assert best_prefix(held, 0.05) == 6                  # alike throughout: every frame
+    assert best_prefix(held, 0.0) == 1                   # no margin: exact ties, the first
+    lost = [[1.0, 1.0]] * 3 + [[3.0, 1.0]] * 3           # holds three frames, then lost
+    assert best_prefix(lost, 0.05) == 3
+    # the mean is within the margin (what "all" asks), the last frame is not
+    tail = [[0.9, 1.0]] * 5 + [[1.2, 1.0]]
+    assert np.mean(np.asarray(tail)[:, 0]) <= 1.05 * np.mean(np.asarray(tail)[:, 1])
+    assert best_prefix(tail, 0.05) == 5
+    assert best_prefix([[1.2, 1.0], [1.0, 1.0]], 0.05) == 0   # worse next to the correction
+    assert best_prefix([[1.2, 1.0], [0.5, 1.0]], 0.05) == 2   # ... but made up for
+    assert best_prefix(np.zeros((0, 2)), 0.05) == 0
+    with pytest.raises(ValueError, match="retro_take"):
+        TrackerSettings(heading={"retro_take": "some"})
+
+
+def test_a_backward_track_is_given_up_once_it_scores_worse_frame_after_frame():
+    from depthtrack.track.loop import gave_up
+    held, lost = [[1.0, 1.0]] * 3, [[2.0, 1.0]]
+    # summed excess over 1.05 x forward: -0.05, -0.1, -0.15, then +0.95 a frame
+    assert not gave_up(held + lost * 4, 0.05, 5)         # four frames past its best
+    assert gave_up(held + lost * 5, 0.05, 5)             # five
+    assert not gave_up(held + lost * 5, 0.05, 0)         # 0: never
+    # worse frame after frame, but the sum still below zero: the mean rule may yet take it
+    assert not gave_up([[0.5, 1.0]] * 3 + [[1.1, 1.0]] * 6, 0.05, 5)
+    # a new minimum restarts the count
+    back = lost * 2 + [[0.0, 1.0]] * 3                   # sums 0.95, 1.9, 0.85, -0.2, -1.25
+    assert not gave_up(back + lost * 4, 0.05, 5)         # four past the new minimum
+    assert gave_up(back + lost * 5, 0.05, 5)
 
 
 def test_limb_swapped_twins_exchange_one_pair_of_limbs_and_keep_the_trunk():

@@ -280,22 +280,60 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             indices.append(index)
             backward.append(state.log[-1]["cost"])
             judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
+            if gave_up(judged, settings.heading.retro_margin, settings.heading.retro_give_up):
+                stopped = "worse"
+                break
     finally:
         tracker.settings = settings
     entry = {"kind": kind, "index": at, "frames": len(indices),
              "stopped": stopped or "window", "taken": False}
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)
-        taken = bool(e_back <= e_forward * (1.0 + settings.heading.retro_margin))
-        entry.update(first=indices[-1], last=indices[0], taken=taken,
+        h = settings.heading
+        # (a track given up on scores above the margin over the frames it reached)
+        n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
+             best_prefix(judged, 0.0) if h.retro_take == "prefix" else 0)
+        entry.update(first=indices[-1], last=indices[0], taken=n > 0,
                      energy_forward=round(float(e_forward), 1),
                      energy_backward=round(float(e_back), 1),
                      share_forward=round(float(np.mean([shares[j] for j in indices])), 4),
-                     share_backward=round(float(np.mean(backward)), 4))
-        if taken:
-            for index, x in zip(indices, poses):
-                held[where[index]] = (index, x)
+                     share_backward=round(float(np.mean(backward)), 4),
+                     frames_taken=n, **({"first_taken": indices[n - 1]} if n else {}))
+        for index, x in zip(indices[:n], poses[:n]):
+            held[where[index]] = (index, x)
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
+
+
+def best_prefix(judged, margin: float) -> int:
+    """How many frames of a refused backward track to take after all, from the correction
+    back (:attr:`HeadingSettings.retro_take` ``"prefix"``, called with ``margin`` 0).
+
+    ``judged (n, 2)``: per frame, nearest the correction first, the backward and the forward
+    pose's energy. The answer is the ``k`` that minimises ``sum_{j<k} (backward_j - (1 +
+    margin) forward_j)``, 0 when no such sum is below zero (the first of equal minima):
+    the frames up to where the backward track stopped doing better than the forward one.
+    """
+    e = np.asarray(judged, dtype=np.float64).reshape(-1, 2)
+    if len(e) == 0:
+        return 0
+    d = np.cumsum(e[:, 0] - (1.0 + margin) * e[:, 1])
+    k = int(np.argmin(d))
+    return k + 1 if d[k] <= 0 else 0
+
+
+def gave_up(judged, margin: float, frames: int) -> bool:
+    """Whether a backward track is refused before its window ends
+    (:attr:`HeadingSettings.retro_give_up`): its energy less the forward's times ``1 +
+    margin``, summed from the correction over ``judged (n, 2)`` (per frame, nearest the
+    correction first, backward then forward), is above zero and has not reached a new
+    minimum for ``frames`` frames (0 = never). The refusal is not certain -- later frames
+    could bring the sum back below zero -- but a backward track that scores worse frame
+    after frame has lost the person or follows a wrong correction."""
+    if frames <= 0 or len(judged) <= frames:
+        return False
+    e = np.asarray(judged, dtype=np.float64)
+    d = np.cumsum(e[:, 0] - (1.0 + margin) * e[:, 1])
+    return bool(d[-1] > 0 and len(d) - 1 - int(np.argmin(d)) >= frames)
 
 
 def _stamp_indices(log, last) -> None:
