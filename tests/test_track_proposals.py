@@ -8,8 +8,6 @@ from depthtrack.body.rotations import matrix_to_rotvec, rotation_about, rotvec_t
 from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.contract import JOINT_INDEX
 from depthtrack.detect.recognizer import JointProposals
-from depthtrack.io import open_sequence
-from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
 from depthtrack.track.heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED
 from depthtrack.track.proposals import TRUNK, disagreement, proposal_candidates
@@ -71,14 +69,6 @@ def test_poses_fitted_to_proposals_put_the_joints_there():
     # the root follows: the fitted body lies as the true one does
     up = rotvec_to_matrix(fits[0, 3:6]) @ np.array([0.0, 1.0, 0.0])
     assert up @ (R @ np.array([0.0, 1.0, 0.0])) > 0.95
-
-
-@pytest.fixture(scope="module")
-def squat(tmp_path_factory):
-    """15 frames of a half squat (SR4000, ToF noise)."""
-    d = tmp_path_factory.mktemp("squat") / "seq"
-    synthesize_procedural("squat", d, start=0.6, seconds=0.6, seed=3)
-    return open_sequence(d)
 
 
 def test_an_upside_down_track_is_put_right_by_the_proposals(squat):

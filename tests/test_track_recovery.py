@@ -7,8 +7,6 @@ from renderer_kind import software_renderer
 from depthtrack.body import BodyModel
 from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.contract import JOINT_NAMES
-from depthtrack.io import open_sequence
-from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
 from depthtrack.track.heading import (LEGS_SWAPPED, SIDES_SWAPPED, facing_direction, fit_joints,
                                       flip_search, limb_swapped_twins, recheck_heading,
@@ -23,14 +21,6 @@ from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
 def _errors(joints, truth):
     return np.linalg.norm(np.asarray(joints) - truth, axis=-1).mean(axis=-1)
-
-
-@pytest.fixture(scope="module")
-def squat(tmp_path_factory):
-    """15 frames of a half squat, arms forward (SR4000, ToF noise)."""
-    d = tmp_path_factory.mktemp("squat") / "seq"
-    synthesize_procedural("squat", d, start=0.6, seconds=0.6, seed=3)
-    return open_sequence(d)
 
 
 def test_swapped_twin_keeps_the_joints_and_faces_the_other_way():
@@ -237,74 +227,6 @@ def test_a_mirrored_start_is_corrected_while_tracking(squat):
     assert stuck[-5:].min() > 0.25
 
 
-def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
-    """With retro_frames, the frames the mirrored start spent back to front before the
-    recheck's switch are re-tracked from the turned pose, and come out right."""
-    body = BodyModel.default(height=1.75)
-    truth = squat.joints
-    x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
-    alone = TrackerSettings().updated({"search": {"untwist": []}})
-    retro = alone.updated({"heading": {"retro_frames": 10}})
-    pulled, poses = [], {}
-
-    def source():
-        for j in range(len(squat)):
-            pulled.append(j)
-            yield squat.depth(j)
-    with Tracker(body, squat.camera, settings=retro) as tracker:
-        for i, x in tracker.stream(source(), init_pose=x0):
-            # each pose is held back ten frames (a switch may still re-track it), no more
-            assert len(pulled) == min(i + 11, len(squat))
-            poses[i] = x
-        info = tracker.describe()
-    assert sorted(poses) == list(range(len(squat)))
-    err = _errors(body.joint_positions(np.array([poses[i] for i in range(len(squat))])), truth)
-    (switch,) = info["heading_switches"]
-    (retrack,) = info["heading_retracks"]
-    assert retrack["index"] == switch["index"] and retrack["taken"]
-    assert retrack["first"] == 0 and retrack["last"] == switch["index"] - 1
-    assert retrack["frames_taken"] == retrack["frames"] and retrack["first_taken"] == 0
-    # the two headings explain these frames alike (the mirrored even a little better):
-    # continuity with the switch is what the re-track adds
-    assert abs(retrack["energy_backward"] / retrack["energy_forward"] - 1.0) < 0.05
-    # no frame left back to front, frame 0 included (the previous test: without the
-    # re-track the same start is mirrored, 25 cm and more, until the switch)
-    assert err.max() < 0.1
-
-
-def test_a_backward_track_gives_the_frames_up_to_where_it_stopped_doing_as_well():
-    from depthtrack.track.loop import best_prefix
-    held = [[1.0, 1.0]] * 6
-    assert best_prefix(held, 0.05) == 6                  # alike throughout: every frame
-    assert best_prefix(held, 0.0) == 1                   # no margin: exact ties, the first
-    lost = [[1.0, 1.0]] * 3 + [[3.0, 1.0]] * 3           # holds three frames, then lost
-    assert best_prefix(lost, 0.05) == 3
-    # the mean is within the margin (what "all" asks), the last frame is not
-    tail = [[0.9, 1.0]] * 5 + [[1.2, 1.0]]
-    assert np.mean(np.asarray(tail)[:, 0]) <= 1.05 * np.mean(np.asarray(tail)[:, 1])
-    assert best_prefix(tail, 0.05) == 5
-    assert best_prefix([[1.2, 1.0], [1.0, 1.0]], 0.05) == 0   # worse next to the correction
-    assert best_prefix([[1.2, 1.0], [0.5, 1.0]], 0.05) == 2   # ... but made up for
-    assert best_prefix(np.zeros((0, 2)), 0.05) == 0
-    with pytest.raises(ValueError, match="retro_take"):
-        TrackerSettings(heading={"retro_take": "some"})
-
-
-def test_a_backward_track_is_given_up_once_it_scores_worse_frame_after_frame():
-    from depthtrack.track.loop import gave_up
-    held, lost = [[1.0, 1.0]] * 3, [[2.0, 1.0]]
-    # summed excess over 1.05 x forward: -0.05, -0.1, -0.15, then +0.95 a frame
-    assert not gave_up(held + lost * 4, 0.05, 5)         # four frames past its best
-    assert gave_up(held + lost * 5, 0.05, 5)             # five
-    assert not gave_up(held + lost * 5, 0.05, 0)         # 0: never
-    # worse frame after frame, but the sum still below zero: the mean rule may yet take it
-    assert not gave_up([[0.5, 1.0]] * 3 + [[1.1, 1.0]] * 6, 0.05, 5)
-    # a new minimum restarts the count
-    back = lost * 2 + [[0.0, 1.0]] * 3                   # sums 0.95, 1.9, 0.85, -0.2, -1.25
-    assert not gave_up(back + lost * 4, 0.05, 5)         # four past the new minimum
-    assert gave_up(back + lost * 5, 0.05, 5)
-
-
 def test_limb_swapped_twins_exchange_one_pair_of_limbs_and_keep_the_trunk():
     body = BodyModel.default(height=1.75)
     pose = np.zeros(48)
@@ -378,35 +300,6 @@ def test_a_start_with_the_legs_crossed_is_uncrossed_while_tracking(squat):
     with Tracker(body, squat.camera, settings=off) as tracker:
         stuck = leg_errors(tracker.track_sequence(squat, init_pose=x0).joints)
     assert stuck[-5:].min() > 0.15
-
-
-def test_a_correction_is_told_by_its_kind_and_the_forward_track_by_what_it_has():
-    from depthtrack.track.loop import _forward_agrees, new_correction
-    before = TrackingState(recoveries=({"frame": 1, "frames_to_recover": 0},))
-    limbs = before.replace(limb_swaps=({"frame": 3, "limbs": "legs"},))
-    assert new_correction(before, limbs, ("heading", "limbs")) == "limbs"
-    assert new_correction(before, limbs, ("heading", "recovery")) is None
-    # a loss still open is no correction; one closed with the track found is
-    opened = before.replace(lost={"frame": 4})
-    assert new_correction(before, opened, ("recovery",)) is None
-    found = before.replace(recoveries=before.recoveries + ({"frame": 4, "frames_to_recover": 2},))
-    given_up = before.replace(recoveries=before.recoveries + ({"frame": 4,
-                                                               "frames_to_recover": None},))
-    assert new_correction(before, found.replace(limb_swaps=limbs.limb_swaps),
-                          ("limbs", "recovery")) == "recovery"
-    assert new_correction(before, given_up, ("recovery",)) is None
-    body = BodyModel.default(height=1.75)
-    x = np.zeros(48)
-    x[2] = 3.0
-    x[POSE_INDEX["l_hip_rx"]] = -0.8                 # the left thigh forward
-    joints = np.asarray(body.joint_positions(x))
-    crossed = joints[LEGS_SWAPPED]
-    assert _forward_agrees("limbs", "legs", joints, joints + 0.01)
-    assert not _forward_agrees("limbs", "legs", joints, crossed)
-    assert _forward_agrees("heading", None, joints, crossed)       # the trunk is the same
-    assert not _forward_agrees("heading", None, joints, joints[SIDES_SWAPPED])
-    assert _forward_agrees("recovery", None, joints, joints + 0.02)
-    assert not _forward_agrees("recovery", None, joints, crossed)
 
 
 def test_flip_search_asks_for_the_other_heading_and_switches_on_a_clear_lead_only():

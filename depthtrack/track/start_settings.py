@@ -291,9 +291,10 @@ class HeadingSettings:
     where the backward track explains the image better than the forward one, no margin
     (:func:`.loop.best_prefix`): a backward track that holds the person for twenty frames
     and then loses them in a turn gives those twenty. One that follows a wrong correction
-    scores worse from its first frame and gives none. Default since 2026-11-27 (dev, offline
-    from the backward tracks: cartwheel seed 1 30 -> 56 %, no other sequence changed;
-    README, "The frames before a correction: given up, or taken in part").
+    scores worse from its first frame and gives none. Default since 2026-11-27 (dev: cartwheel seed
+    1 30 -> 55 %, no other sequence changed by more than 0.3 points; README, "The frames
+    before a correction: given up, or taken in part"). A re-track's ``taken`` is true when
+    any frame was taken, ``frames_taken`` says how many.
 
     ``retro_give_up``: a backward track whose energy, less the forward's times ``1 +
     retro_margin`` and summed from the correction, is above zero and has not reached a new
