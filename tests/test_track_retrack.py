@@ -6,14 +6,11 @@ import pytest
 
 from depthtrack.body import BodyModel
 from depthtrack.body.skeleton import POSE_INDEX
+from depthtrack.evaluate.metrics import point_errors
 from depthtrack.track import TrackerSettings
 from depthtrack.track.heading import LEGS_SWAPPED, SIDES_SWAPPED, turned_pose
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
-
-
-def _errors(joints, truth):
-    return np.linalg.norm(np.asarray(joints) - truth, axis=-1).mean(axis=-1)
 
 
 def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
@@ -37,7 +34,8 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
             poses[i] = x
         info = tracker.describe()
     assert sorted(poses) == list(range(len(squat)))
-    err = _errors(body.joint_positions(np.array([poses[i] for i in range(len(squat))])), truth)
+    joints = body.joint_positions(np.array([poses[i] for i in range(len(squat))]))
+    err = point_errors(joints, truth).mean(axis=-1)
     (switch,) = info["heading_switches"]
     (retrack,) = info["heading_retracks"]
     assert retrack["index"] == switch["index"] and retrack["taken"]

@@ -304,6 +304,14 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
 
 
+def summed_excess(judged, margin: float) -> np.ndarray:
+    """``(n,)``: the backward track's energy less the forward's times ``1 + margin``, summed
+    from the correction back over ``judged (n, 2)`` (per frame, nearest the correction
+    first, backward then forward) -- what :func:`best_prefix` and :func:`gave_up` read."""
+    e = np.asarray(judged, dtype=np.float64).reshape(-1, 2)
+    return np.cumsum(e[:, 0] - (1.0 + margin) * e[:, 1])
+
+
 def best_prefix(judged, margin: float) -> int:
     """How many frames of a refused backward track to take after all, from the correction
     back (:attr:`HeadingSettings.retro_take` ``"prefix"``, called with ``margin`` 0).
@@ -313,10 +321,9 @@ def best_prefix(judged, margin: float) -> int:
     margin) forward_j)``, 0 when no such sum is below zero (the first of equal minima):
     the frames up to where the backward track stopped doing better than the forward one.
     """
-    e = np.asarray(judged, dtype=np.float64).reshape(-1, 2)
-    if len(e) == 0:
+    d = summed_excess(judged, margin)
+    if len(d) == 0:
         return 0
-    d = np.cumsum(e[:, 0] - (1.0 + margin) * e[:, 1])
     k = int(np.argmin(d))
     return k + 1 if d[k] <= 0 else 0
 
@@ -331,8 +338,7 @@ def gave_up(judged, margin: float, frames: int) -> bool:
     after frame has lost the person or follows a wrong correction."""
     if frames <= 0 or len(judged) <= frames:
         return False
-    e = np.asarray(judged, dtype=np.float64)
-    d = np.cumsum(e[:, 0] - (1.0 + margin) * e[:, 1])
+    d = summed_excess(judged, margin)
     return bool(d[-1] > 0 and len(d) - 1 - int(np.argmin(d)) >= frames)
 
 
