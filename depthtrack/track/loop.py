@@ -47,7 +47,8 @@ def stream_poses(tracker, frames, init_pose=None):
     held = []              # (index, pose) not yet yielded: the track may still drop them
     retro = s.heading.retro_frames
     recent = collections.deque(maxlen=max(retro, 1))   # (index, depth) a correction may re-track
-    lowest = 0             # the first frame a re-track may reach: the start, or past the last one
+    # the first frame each kind's re-track may reach: the start, or past an earlier correction
+    lowest = dict.fromkeys(CORRECTION_ORDER, 0)
 
     def take(n):
         out = [pending.popleft() for _ in range(min(n, len(pending)))]
@@ -68,8 +69,8 @@ def stream_poses(tracker, frames, init_pose=None):
             _advance_into(tracker, held, i, depth)
             kind = new_correction(before, tracker.state, s.heading.retro_after) if retro else None
             if kind is not None and tracker.state.pose is not None:
-                retrack_before_correction(tracker, held, recent, lowest, i, kind)
-                lowest = i + 1
+                retrack_before_correction(tracker, held, recent, lowest[kind], i, kind)
+                lowest = reach_after(lowest, kind, i, s.heading.retro_stop)
             recent.append((i, depth))
         else:
             with tracker.recorder.timed("segment"):
@@ -87,7 +88,7 @@ def stream_poses(tracker, frames, init_pose=None):
                 start_state = tracker.state
                 recent.clear()
                 recent.append((i, depth))
-                lowest = i
+                lowest = dict.fromkeys(CORRECTION_ORDER, i)
                 # no front/back check where the user said which way the person faces, unless
                 # the start is near profile (StartSettings.facing_margin)
                 clear = tracker.state.init_info.get("facing_clear") is True
@@ -197,6 +198,16 @@ RETRO_AGREE_M = 0.05
 STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "agrees"}
 
 
+def reach_after(lowest: dict, kind: str, at: int, stop: str) -> dict:
+    """``{kind: first frame}`` a later re-track of each kind (:data:`CORRECTION_ORDER`) may
+    reach once the frames before a correction of ``kind`` on frame ``at`` were re-tracked:
+    past ``at`` for every kind (``stop`` ``"any"``) or for ``kind`` and the kinds after it in
+    the order (``"rank"``; :attr:`HeadingSettings.retro_stop`), the others as they were."""
+    rank = CORRECTION_ORDER.index(kind)
+    return {k: at + 1 if stop == "any" or CORRECTION_ORDER.index(k) >= rank else first
+            for k, first in lowest.items()}
+
+
 def _corrections(state) -> dict:
     """How many corrections of each kind :data:`CORRECTION_ORDER` ``state`` has had: a
     recovery counts where a loss closed with the track found again."""
@@ -232,8 +243,8 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
 
     The backward track runs with the recheck that made the correction off (it must keep the
     correction's choice, :data:`RETRO_OFF`) through ``recent`` ``[(index, depth), ...]``
-    from the newest down, and stops at ``lowest`` (the start, or the frame after the last
-    re-tracked correction), at a pose already yielded or dropped, at a lost track, or where
+    from the newest down, and stops at ``lowest`` (the start, or the frame after an earlier
+    re-tracked correction, :func:`reach_after`), at a pose already yielded or dropped, at a lost track, or where
     the forward track already has what the correction gave (:func:`_forward_agrees`: after a
     heading switch, faces the way the backward track does, their trunks' left-to-right axes
     less than a quarter turn apart, :func:`~depthtrack.body.facing.back_to_front`; after a

@@ -141,6 +141,8 @@ TWIN_STARTS = ("turned", "rest")
 RETRO_KINDS = ("heading", "limbs", "recovery")
 #: How much of a backward track :attr:`HeadingSettings.retro_take` may take.
 RETRO_TAKES = ("all", "prefix")
+#: Which earlier corrections a re-track stops at (:attr:`HeadingSettings.retro_stop`).
+RETRO_STOPS = ("any", "rank")
 #: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
 START_SCORES = ("energy", "unexplained")
 
@@ -303,6 +305,15 @@ class HeadingSettings:
     take the frames next to the correction): it has lost the person or follows a wrong
     correction, and the rest of its window is work for nothing. Default 5 since 2026-11-27
     (dev: no sequence changed, 22 % fewer frames re-tracked).
+
+    ``retro_stop``: which earlier corrections a backward track stops at (it always stops at
+    the start). ``"any"``: the frame after any earlier correction whose frames were
+    re-tracked. ``"rank"``: only one of its own kind or of a kind before it in
+    :data:`.loop.CORRECTION_ORDER` (heading, recovery, limbs): a heading switch's backward
+    track goes on past a limb swap or a recovery (those corrected the limbs or found the
+    person again, with the heading the forward track had, which the switch now says was
+    wrong), a recovery's past a limb swap; a limb swap's stops at any. Where it goes on, the
+    energy rule judges the frames past the earlier correction as any others.
     """
 
     frames: int = 10
@@ -336,6 +347,7 @@ class HeadingSettings:
     retro_after: tuple = ("heading", "limbs", "recovery")
     retro_take: str = "prefix"
     retro_give_up: int = 5
+    retro_stop: str = "any"
 
     def __post_init__(self):
         _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
@@ -356,6 +368,8 @@ class HeadingSettings:
         _check(set(self.retro_after) <= set(RETRO_KINDS),
                f"HeadingSettings.retro_after must be a choice of {', '.join(RETRO_KINDS)}, "
                f"not {self.retro_after!r}")
+        _check(self.retro_stop in RETRO_STOPS, f"HeadingSettings.retro_stop must be one of "
+                                               f"{', '.join(RETRO_STOPS)}, not {self.retro_stop!r}")
         _check(self.retro_take in RETRO_TAKES, f"HeadingSettings.retro_take must be one of "
                                                f"{', '.join(RETRO_TAKES)}, not {self.retro_take!r}")
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
