@@ -109,3 +109,21 @@ def test_a_correction_is_told_by_its_kind_and_the_forward_track_by_what_it_has()
     assert not _forward_agrees("heading", None, joints, joints[SIDES_SWAPPED])
     assert _forward_agrees("recovery", None, joints, joints + 0.02)
     assert not _forward_agrees("recovery", None, joints, crossed)
+
+
+def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
+    from depthtrack.track.loop import CORRECTION_ORDER, reach_after
+    start = dict.fromkeys(CORRECTION_ORDER, 3)                     # tracking started on 3
+    # "any": every later re-track stops past the correction, whatever its kind
+    assert reach_after(start, "limbs", 10, "any") == dict.fromkeys(CORRECTION_ORDER, 11)
+    # "rank": a limb swap bars only limb re-tracks, a recovery recoveries and limbs
+    after_limbs = reach_after(start, "limbs", 10, "rank")
+    assert after_limbs == {"heading": 3, "recovery": 3, "limbs": 11}
+    after_found = reach_after(after_limbs, "recovery", 20, "rank")
+    assert after_found == {"heading": 3, "recovery": 21, "limbs": 21}
+    # a heading switch bars every kind, and a later limb swap leaves it where it was
+    after_turn = reach_after(after_found, "heading", 30, "rank")
+    assert after_turn == dict.fromkeys(CORRECTION_ORDER, 31)
+    assert reach_after(after_turn, "limbs", 40, "rank")["heading"] == 31
+    with pytest.raises(ValueError, match="retro_stop"):
+        TrackerSettings(heading={"retro_stop": "never"})
