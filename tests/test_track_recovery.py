@@ -10,7 +10,7 @@ from depthtrack.contract import JOINT_NAMES
 from depthtrack.track import TrackerSettings
 from depthtrack.track.heading import (LEGS_SWAPPED, SIDES_SWAPPED, facing_direction, fit_joints,
                                       flip_search, limb_swapped_twins, recheck_heading,
-                                      limb_votes, recheck_limb_sides,
+                                      recheck_limb_sides,
                                       search_switch, settle_heading, sort_by_heading, swapped_twin,
                                       swapped_twins, turned_pose)
 from depthtrack.track.judge import judge_frame
@@ -259,28 +259,14 @@ def test_the_sides_recheck_takes_a_twin_only_on_a_clear_lead():
     x, changes, switched = recheck_limb_sides(state, np.zeros(48), refit, twins, s)
     assert switched and (x == 1.0).all()
     assert changes["limb_swaps"] == ({"frame": h.limb_every, "limbs": "legs",
-                                      "energy_kept": 100.0, "energy_swapped": 80.0,
-                                      "votes": 1},)
+                                      "energy_kept": 100.0, "energy_swapped": 80.0},)
     close = {0.0: 100.0, 1.0: 100.0 * (1 - 0.5 * h.limb_margin), 2.0: 120.0}
     x, changes, switched = recheck_limb_sides(
         state, np.zeros(48), lambda pose: (pose, close[float(pose[0])]), twins, s)
-    assert not switched and changes == {"limb_votes": ()} and not x.any()
+    assert not switched and changes == {} and not x.any()
     _, changes, switched = recheck_limb_sides(state.replace(log=({},)), np.zeros(48), refit,
                                               twins, s)
     assert not switched and changes == {}
-    # limb_votes 2: the first win is a vote, the second in a row for the same limbs swaps
-    two = s.updated({"heading": {"limb_votes": 2}})
-    x, changes, switched = recheck_limb_sides(state, np.zeros(48), refit, twins, two)
-    assert not switched and changes == {"limb_votes": ("legs", 1)} and not x.any()
-    x, changes, switched = recheck_limb_sides(state.replace(**changes), np.zeros(48), refit,
-                                              twins, two)
-    assert switched and (x == 1.0).all() and changes["limb_votes"] == ()
-    assert changes["limb_swaps"][0]["votes"] == 2
-    # a win by the other limbs' twin starts the count again; a loss clears it
-    assert limb_votes(("arms", 1), "legs", True) == ("legs", 1)
-    assert limb_votes(("legs", 1), "legs", False) == ()
-    with pytest.raises(ValueError, match="limb_votes"):
-        TrackerSettings(heading={"limb_votes": 0})
 
 
 def test_a_start_with_the_legs_crossed_is_uncrossed_while_tracking(squat):

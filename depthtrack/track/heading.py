@@ -305,8 +305,7 @@ def recheck_limb_sides(state, pose, refit, limb_twins_of, settings):
     clip; the legs-swapped twin of frame 25, climbed, had 21 % lower energy and 3.0 instead of
     7.3 cm mean joint error). Every :attr:`HeadingSettings.limb_every` frames both twins are
     climbed on the frame like the tracked pose, and the lower one replaces the track when its
-    energy is lower by the fraction :attr:`HeadingSettings.limb_margin`, on
-    :attr:`HeadingSettings.limb_votes` rechecks in a row with the same limbs' twin.
+    energy is lower by the fraction :attr:`HeadingSettings.limb_margin`.
 
     Parameters
     ----------
@@ -325,7 +324,7 @@ def recheck_limb_sides(state, pose, refit, limb_twins_of, settings):
     pose : (48,) float
         The twin when it took over, else ``pose``.
     changes : dict
-        For the state (``limb_votes``, ``limb_swaps``).
+        For the state (``limb_swaps``).
     switched : bool
     """
     if not due(state, settings.heading.limb_every):
@@ -334,22 +333,11 @@ def recheck_limb_sides(state, pose, refit, limb_twins_of, settings):
     fits = [(name, *refit(twin)) for name, twin in limb_twins_of(pose)]
     name, y, e_twin = min(fits, key=lambda f: float(f[2]))
     lead = (e_pose - float(e_twin)) / max(abs(e_pose), 1e-9)
-    votes = limb_votes(state.limb_votes, name, lead > settings.heading.limb_margin)
-    if not votes or votes[1] < settings.heading.limb_votes:
-        return pose, {"limb_votes": votes}, False
+    if lead <= settings.heading.limb_margin:
+        return pose, {}, False
     swap = {"frame": state.frame, "limbs": name, "energy_kept": round(float(e_pose), 1),
-            "energy_swapped": round(float(e_twin), 1), "votes": votes[1]}
-    return np.asarray(y, dtype=np.float64), {"limb_votes": (),
-                                             "limb_swaps": state.limb_swaps + (swap,)}, True
-
-
-def limb_votes(votes: tuple, limbs: str, won: bool) -> tuple:
-    """``(limbs, n)`` after a sides recheck whose lowest twin was ``limbs``'s and beat the
-    tracked pose (``won``) or not: one more in a row when the same limbs won the last time,
-    a first otherwise; ``()`` when it lost."""
-    if not won:
-        return ()
-    return (limbs, votes[1] + 1) if votes and votes[0] == limbs else (limbs, 1)
+            "energy_swapped": round(float(e_twin), 1)}
+    return np.asarray(y, dtype=np.float64), {"limb_swaps": state.limb_swaps + (swap,)}, True
 
 
 def facing_direction(pose):

@@ -58,9 +58,8 @@ def recheck_stage(tracker, state, energy, frame, x):
             return y, changes, "heading"
         y, more, swapped = recheck_limb_sides(
             state, x, refit, lambda pose: limb_swapped_twins(tracker.body, pose), s)
-        changes = {**changes, **more}           # the limbs' votes, whether swapped or not
         if swapped:
-            return y, changes, "limbs"
+            return y, {**changes, **more}, "limbs"
     if tracker.forest is not None:
         with recorder.timed("reach"):
             y, more, reached = recheck_reach(

@@ -199,12 +199,7 @@ class HeadingSettings:
     The sides of the limbs too: every ``limb_every`` frames (0 = never) twins of the tracked
     pose with the legs' or the arms' sides exchanged are climbed alike, and the lower one
     replaces the track when its energy is lower by the fraction ``limb_margin``
-    (:func:`.heading.recheck_limb_sides`: a track with its legs crossed) -- on ``limb_votes``
-    rechecks in a row, the same limbs' twin winning each (1 = at once). A jogger's legs seen
-    from behind pass each other, and a crossed twin can win one recheck by chance (dev 02_03
-    seed 4, frame 24: the crossed legs by 7.5 %, kept crossed for ten frames); a twin that
-    is right still wins ``limb_every`` frames later, and the re-track after the swap
-    (``retro_after``) gives back the frames in between.
+    (:func:`.heading.recheck_limb_sides`: a track with its legs crossed).
 
     ``twin_starts``: where the swapped twin's fit starts (:data:`TWIN_STARTS`, one or both;
     :func:`.heading.swapped_twins`); every twin is climbed and the lowest energy competes,
@@ -342,7 +337,6 @@ class HeadingSettings:
     twin_starts: tuple = ("turned", "rest")
     limb_every: int = 4
     limb_margin: float = 0.05
-    limb_votes: int = 1
     refit_level: int = 0
     twin_climbs: int = 1
     recheck_tile: int = 0
@@ -367,7 +361,7 @@ class HeadingSettings:
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
                   "reseat_margin", "retro_frames", "retro_margin", "retro_give_up", allow_zero=True)
-        _positive(self, "votes", "limb_votes", "twin_passes", "reseat_climbs")
+        _positive(self, "votes", "twin_passes", "reseat_climbs")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "

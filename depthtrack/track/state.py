@@ -43,10 +43,6 @@ class TrackingState:
         was lost; None = closed unrecovered after :attr:`JudgeSettings.max_lost_frames`).
     heading_votes : int
         Heading rechecks in a row that preferred the turned twin (:mod:`.heading`).
-    limb_votes : tuple
-        ``(limbs, n)``: the sides rechecks in a row whose lowest twin, that of ``limbs``
-        (``"legs"``, ``"arms"``), beat the tracked pose (:func:`.heading.recheck_limb_sides`);
-        ``()`` before any.
     proposal_misses : int
         Frames in a row whose pose the recogniser's proposals disagree with (:mod:`.proposals`).
     heading_evidence : float
@@ -84,7 +80,6 @@ class TrackingState:
     recoveries: tuple = ()
     heading_votes: int = 0
     heading_evidence: float = 0.0
-    limb_votes: tuple = ()
     proposal_misses: int = 0
     heading_switches: tuple = ()
     limb_swaps: tuple = ()

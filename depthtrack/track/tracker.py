@@ -214,8 +214,7 @@ class Tracker:
             info = {"mode": "automatic", **info, "energy": float(e)}
         state = state.logged({"energy": e, "cost": unexplained(energy, x)}, pose=x,
                              velocity=np.zeros(self.body.dof), init_info=info,
-                             heading_votes=0, heading_evidence=0.0, limb_votes=(),
-                             proposal_misses=0)
+                             heading_votes=0, heading_evidence=0.0, proposal_misses=0)
         self.recorder.add("init", time.perf_counter() - t0)
         if not self.recorder.initialised():
             self.recorder.count("reinitialisations")
