@@ -244,12 +244,12 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     The backward track runs with the recheck that made the correction off (it must keep the
     correction's choice, :data:`RETRO_OFF`) through ``recent`` ``[(index, depth), ...]``
     from the newest down, and stops at ``lowest`` (the start, or the frame after an earlier
-    re-tracked correction, :func:`reach_after`), at a pose already yielded or dropped, at a lost track, or where
-    the forward track already has what the correction gave (:func:`_forward_agrees`: after a
-    heading switch, faces the way the backward track does, their trunks' left-to-right axes
-    less than a quarter turn apart, :func:`~depthtrack.body.facing.back_to_front`; after a
-    limb swap, has the swapped limbs on the backward track's sides,
-    :func:`~depthtrack.body.facing.sides_exchanged`; after a recovery, agrees with it): from
+    re-tracked correction, :func:`reach_after`), at a pose already yielded or dropped, at a
+    lost track, or where the forward track already has what the correction gave
+    (:func:`_forward_agrees`: after a heading switch, faces the way the backward track does,
+    their trunks' left-to-right axes less than a quarter turn apart,
+    :func:`~depthtrack.body.facing.back_to_front`; after a limb swap, has the swapped limbs
+    on the backward track's sides, :func:`~depthtrack.body.facing.sides_exchanged`; after a recovery, agrees with it): from
     there back the forward track had it already, and its poses stay.
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
