@@ -249,8 +249,9 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     (:func:`_forward_agrees`: after a heading switch, faces the way the backward track does,
     their trunks' left-to-right axes less than a quarter turn apart,
     :func:`~depthtrack.body.facing.back_to_front`; after a limb swap, has the swapped limbs
-    on the backward track's sides, :func:`~depthtrack.body.facing.sides_exchanged`; after a recovery, agrees with it): from
-    there back the forward track had it already, and its poses stay.
+    on the backward track's sides, :func:`~depthtrack.body.facing.sides_exchanged`; after a
+    recovery, agrees with it): from there back the forward track had it already, and its
+    poses stay.
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
     exceeds the forward poses' on the same frames by more than the fraction
