@@ -264,6 +264,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     goes on as it would have.
     """
     settings = tracker.settings
+    h = settings.heading
     corrected = tracker.state
     detail = corrected.limb_swaps[-1]["limbs"] if kind == "limbs" else None
     where = {index: k for k, (index, _) in enumerate(held)}
@@ -292,7 +293,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             indices.append(index)
             backward.append(state.log[-1]["cost"])
             judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
-            if gave_up(judged, settings.heading.retro_margin, settings.heading.retro_give_up):
+            if gave_up(judged, h.retro_margin, h.retro_give_up):
                 stopped = "worse"
                 break
     finally:
@@ -301,7 +302,6 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
              "stopped": stopped or "window", "taken": False}
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)
-        h = settings.heading
         # (a track given up on scores above the margin over the frames it reached)
         n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              best_prefix(judged, 0.0) if h.retro_take == "prefix" else 0)

@@ -17,6 +17,12 @@ def positive(group, *names, allow_zero=False):
                f"{type(group).__name__}.{n} must be {'>= 0' if allow_zero else '> 0'}, not {v!r}")
 
 
+def one_of(group, name, choices):
+    v = getattr(group, name)
+    check(v in choices, f"{type(group).__name__}.{name} must be one of {', '.join(choices)}, "
+                        f"not {v!r}")
+
+
 def power_of_two(v, name, zero_ok=False):
     check((zero_ok and v == 0) or (4 <= v <= 1024 and not v & (v - 1)),
            f"{name} must be a power of two in 4..1024{' or 0' if zero_ok else ''}, not {v!r}")

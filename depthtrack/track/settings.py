@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from ..errors import InputError
 from .flat_names import FLAT_NAMES  # noqa: F401  (re-exported: the flat names' one place)
 from .setting_checks import check as _check
+from .setting_checks import one_of as _one_of
 from .setting_checks import positive as _positive
 from .setting_checks import power_of_two as _power_of_two
 # the groups of a start are defined in start_settings.py; import every group from here
@@ -253,8 +254,7 @@ class JudgeSettings:
     def __post_init__(self):
         _positive(self, "lost_ratio", "window", "max_lost_frames")
         _positive(self, "lost_margin", allow_zero=True)
-        _check(self.recover_by in RECOVER_BY, f"JudgeSettings.recover_by must be one of "
-                                              f"{', '.join(RECOVER_BY)}, not {self.recover_by!r}")
+        _one_of(self, "recover_by", RECOVER_BY)
 
 
 #: What a recovery's pose is judged by (:attr:`JudgeSettings.recover_by`).

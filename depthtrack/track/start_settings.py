@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .setting_checks import check as _check
+from .setting_checks import one_of as _one_of
 from .setting_checks import positive as _positive
 from .setting_checks import power_of_two as _power_of_two
 
@@ -118,10 +119,8 @@ class StartSettings:
                                                      f"be in [0, 1], not {self.complete_fraction}")
         _check(int(self.complete_frames) >= 1, f"StartSettings.complete_frames must be at "
                                                f"least 1, not {self.complete_frames}")
-        _check(self.facing in FACINGS, f"StartSettings.facing must be one of "
-                                       f"{', '.join(FACINGS)}, not {self.facing!r}")
-        _check(self.legs in LEG_SEARCHES, f"StartSettings.legs must be one of "
-                                          f"{', '.join(LEG_SEARCHES)}, not {self.legs!r}")
+        _one_of(self, "facing", FACINGS)
+        _one_of(self, "legs", LEG_SEARCHES)
         _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
                   "root_passes", "finalists")
         _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",
@@ -355,10 +354,8 @@ class HeadingSettings:
     retro_stop: str = "any"
 
     def __post_init__(self):
-        _check(self.start_by in START_SCORES, f"HeadingSettings.start_by must be one of "
-                                              f"{', '.join(START_SCORES)}, not {self.start_by!r}")
-        _check(self.start_twin in START_TWINS, f"HeadingSettings.start_twin must be one of "
-                                               f"{', '.join(START_TWINS)}, not {self.start_twin!r}")
+        _one_of(self, "start_by", START_SCORES)
+        _one_of(self, "start_twin", START_TWINS)
         _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
@@ -373,10 +370,8 @@ class HeadingSettings:
         _check(set(self.retro_after) <= set(RETRO_KINDS),
                f"HeadingSettings.retro_after must be a choice of {', '.join(RETRO_KINDS)}, "
                f"not {self.retro_after!r}")
-        _check(self.retro_stop in RETRO_STOPS, f"HeadingSettings.retro_stop must be one of "
-                                               f"{', '.join(RETRO_STOPS)}, not {self.retro_stop!r}")
-        _check(self.retro_take in RETRO_TAKES, f"HeadingSettings.retro_take must be one of "
-                                               f"{', '.join(RETRO_TAKES)}, not {self.retro_take!r}")
+        _one_of(self, "retro_stop", RETRO_STOPS)
+        _one_of(self, "retro_take", RETRO_TAKES)
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
                f"HeadingSettings.twin_starts must be a non-empty choice of "
                f"{', '.join(TWIN_STARTS)}, not {self.twin_starts!r}")
