@@ -8,11 +8,12 @@ joints (then climbed): energy, unexplained share, facing against the previous po
 share of joints within 10 cm and mean joint error. A search result whose energy is above the
 truth fit's is a failure of the search, not of the likelihood.
 
-    .venv/bin/python tools/replay_search.py SEQ TRACK F [--legs]
+    .venv/bin/python tools/replay_search.py SEQ TRACK F [--legs] [--bends]
 
 ``SEQ``: a synthesized sequence with ``groundtruth/joints.csv``; ``TRACK``: a track of it
 (``depthtrack track`` / ``eval --tracks-out``: ``body.json``, ``poses.npz``); ``--legs``:
-the search also tries raised legs (``StartSettings.legs``). Example (README, "Lost and
+the search also tries raised legs (``StartSettings.legs``); ``--bends``: bodies bent at the
+hips (``StartSettings.bends``). Example (README, "Lost and
 found"): dev 90_05 seed 1, frame 40.
 """
 from __future__ import annotations
@@ -41,6 +42,7 @@ def main(argv=None) -> int:
                                    "OUT/dev/tracks/90_05_c0_s1/hc+ep 40 --legs")
     parser.add_argument("frame", type=int, help="the frame to replay (>= 1)")
     parser.add_argument("--legs", action="store_true", help="also try raised legs")
+    parser.add_argument("--bends", action="store_true", help="also try bodies bent at the hips")
     args = parser.parse_args(argv)
     try:
         seq, body, poses = read_track(args.seq, args.track, [args.frame])
@@ -53,7 +55,8 @@ def main(argv=None) -> int:
     with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=TrackerSettings()) as tr:
         frame, energy = frame_energy(tr, seq, poses, f)
         found, _, info = global_search(tr, energy, frame, heading=facing_direction(previous),
-                                       body_axis=long_axis(previous), legs=args.legs)
+                                       body_axis=long_axis(previous), legs=args.legs,
+                                       bends=args.bends)
         fitted = fit_joints(body, truth, previous)
         climbed, _ = climb(energy, tr.climbers.start, fitted, tr.recorder)
 
@@ -66,7 +69,8 @@ def main(argv=None) -> int:
 
         line(f"frame {f - 1}'s pose", previous)
         line(f"frame {f}'s tracked pose", poses[f])
-        line("search" + (" with legs" if args.legs else ""), found)
+        line("search" + (" with legs" if args.legs else "") + (" with bends" if args.bends else ""),
+             found)
         line("truth fit", fitted)
         line("truth fit, climbed", climbed)
         print("finalists:", ", ".join(f"{d['from']} {d['energy']}" for d in info["finalists"]))

@@ -121,7 +121,8 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
         y, _, _ = global_search(tracker, energy, frame,
                                 heading=None if doubted else facing_direction(previous),
                                 body_axis=None if doubted else long_axis(previous),
-                                legs=tracker.settings.start.legs in ("recovery", "always"))
+                                legs=tracker.settings.start.legs in ("recovery", "always"),
+                                bends=tracker.settings.start.bends in ("recovery", "always"))
     except InputError:
         return False, x, cost
     y_cost = unexplained(energy, y)

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
 from ..body.skeleton import MODEL_FORWARD, MODEL_UP, POSE_INDEX
+from ..contract import JOINT_NAMES
 from ..errors import InputError
 from ..motion.retarget import rotation_between
 from .observation import robust_points
@@ -36,6 +37,15 @@ ARM_POSES = {"relaxed": (0.0, 0.0), "t-pose": (0.0, -1.13), "raised": (0.0, -2.6
 #: fit won (dev 90_05, a jump kick: README, "The tracker").
 LEG_POSES = {"left forward": ("l_hip_rx", -1.2), "right forward": ("r_hip_rx", -1.2),
              "left out": ("l_hip_rz", 0.9), "right out": ("r_hip_rz", -0.9)}
+#: Bent bodies the global search also tries (:attr:`StartSettings.bends`), each on every
+#: candidate of the grid: pose slots and radians. The grid's bodies are straight, so a
+#: body folded at the hips (a forward fold, a yoga "down dog", hands and feet on the floor)
+#: or sitting was reached only through the recogniser's proposals, which are poorest on
+#: exactly those poses; the climb from a straight body did not bend it far enough (train
+#: 144_30, sun salutation: a start 85 cm off, energy 450 above a fit to the true joints).
+BEND_POSES = {"pike": (("l_hip_rx", -1.6), ("r_hip_rx", -1.6)),
+              "seated": (("l_hip_rx", -1.6), ("r_hip_rx", -1.6), ("l_knee_rx", 1.6),
+                         ("r_knee_rx", 1.6))}
 #: Pose slots the arm poses set: both shoulders' rx and rz.
 ARM_SLOTS = [POSE_INDEX[n] for n in ("l_shoulder_rx", "l_shoulder_rz", "r_shoulder_rx",
                                      "r_shoulder_rz")]
@@ -159,17 +169,40 @@ def with_leg_poses(poses) -> np.ndarray:
     return np.concatenate(out)
 
 
-def candidate_poses(points, up, centre, render_body, settings):
-    """The scored candidates of the global search: ``(poses (N, 48), orientations K)``."""
+def head_to_feet_turn(render_body, pose) -> np.ndarray:
+    """``(3, 3)``: the rotation taking ``pose``'s (root unturned) chord from the ankles'
+    midpoint to the head onto the model's up axis (the identity for a straight body)."""
+    joints = render_body.joint_positions(pose)
+    names = list(JOINT_NAMES)
+    feet = 0.5 * (joints[names.index("l_ankle")] + joints[names.index("r_ankle")])
+    chord = joints[names.index("head")] - feet
+    return rotation_between(chord / np.linalg.norm(chord), MODEL_UP)
+
+
+def candidate_poses(points, up, centre, render_body, settings, bend=None):
+    """The scored candidates of the global search: ``(poses (N, 48), orientations K)``.
+
+    Every arm pose (:data:`ARM_POSES`) at every orientation of :func:`initial_orientations`,
+    the body straight, or with ``bend`` (a key of :data:`BEND_POSES`) bent: then the chord
+    from its feet to its head, not its trunk, lies along each orientation's axis (a body
+    folded over with hands and feet on the floor spans the cloud's long axis feet to head,
+    its hips up in one of the eight turns about it).
+    """
     g = settings.start
     rotations = initial_orientations(points, up)
     arms = np.zeros((len(ARM_POSES), render_body.dof))
     for k, (rx, rz) in enumerate(ARM_POSES.values()):
         arms[k, ARM_SLOTS] = rx, rz, rx, -rz
+    turns = np.tile(np.eye(3), (len(ARM_POSES), 1, 1))
+    if bend is not None:
+        for slot, angle in BEND_POSES[bend]:
+            arms[:, POSE_INDEX[slot]] = angle
+        turns = np.array([head_to_feet_turn(render_body, a) for a in arms])
     poses = np.repeat(arms, len(rotations), axis=0)
-    R = np.tile(rotations, (len(ARM_POSES), 1, 1))
+    R0 = np.tile(rotations, (len(ARM_POSES), 1, 1))
+    R = R0 @ np.repeat(turns, len(rotations), axis=0)
     poses[:, 3:6] = matrix_to_rotvec(R)
-    body_axis = R @ MODEL_UP                                          # (K, 3) head direction
+    body_axis = R0 @ MODEL_UP                # (K, 3) the feet-to-head direction
     # model vertices at pelvis = 0, then shift so the centre and the axial extent match
     verts = np.asarray(render_body.posed_vertices(poses))            # (K, V, 3)
     proj_model = np.einsum("kvi,ki->kv", verts, body_axis)
@@ -191,7 +224,8 @@ def candidate_poses(points, up, centre, render_body, settings):
     return np.concatenate(shifted), len(rotations)
 
 
-def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bool = False):
+def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bool = False,
+                  bends: bool = False):
     """Find the body in ``frame`` without a previous pose (module docstring).
 
     Parameters
@@ -208,6 +242,8 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         Last tracked head direction (recovery): the prior prefers it to 'up'.
     legs : bool
         Also try every grid candidate with each of :data:`LEG_POSES`.
+    bends : bool
+        Also try every grid candidate with each of :data:`BEND_POSES` (after ``legs``).
 
     Returns
     -------
@@ -229,6 +265,11 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     n_legs_down = len(poses)
     if legs:
         poses = with_leg_poses(poses)
+    n_legs = len(poses)
+    if bends:
+        poses = np.concatenate([poses] + [
+            candidate_poses(points, up, centre, tracker.render_body, tracker.settings, bend)[0]
+            for bend in BEND_POSES])
     n_grid = len(poses)
     p = tracker.settings.propose
     proposals = frame_proposals(tracker, frame)
@@ -254,10 +295,19 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
                 + 2.0 * pixels * wrong_side(x, told, up, g.facing_margin))
 
     order = np.argsort(energies + heading_cost(poses))
-    shortlist = list(order[:g.shortlist])
+
+    def bend_of(i):
+        """Which of :data:`BEND_POSES` candidate ``i`` is (-1: straight or from proposals)."""
+        return (int(i) - n_legs) // n_legs_down if n_legs <= i < n_grid else -1
+
+    # the bent bodies are heard on their own, so the straight search is the same with or
+    # without them: they win only by the final score
+    shortlist = [i for i in order if bend_of(i) < 0][:g.shortlist]
     ours = [i for i in order if i >= n_grid]
     if ours and ours[0] not in shortlist:
         shortlist.append(ours[0])          # the recogniser's best start always gets a hearing
+    for b in range(len(BEND_POSES) if bends else 0):
+        shortlist += [i for i in order if bend_of(i) == b][:g.bend_shortlist]
     climber = tracker.climbers.start
     root_blocks = climber.blocks[:g.root_blocks]
     coarse = []
@@ -268,10 +318,12 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     coarse.sort(key=lambda c: c[0])
     best = None
     finalists = []
-    chosen = coarse[:g.finalists]
+    chosen = [c for c in coarse if bend_of(c[1]) < 0][:g.finalists]
     from_proposals = [c for c in coarse if c[1] >= n_grid]
     if from_proposals and all(c[1] < n_grid for c in chosen):
         chosen.append(from_proposals[0])     # the recogniser's best guess always gets a hearing
+    for b in range(len(BEND_POSES) if bends else 0):
+        chosen += [c for c in coarse if bend_of(c[1]) == b][:g.bend_finalists]
     for e, i, x in chosen:
         x, e = climb(energy, climber, x, rec, start_energy=e, passes=g.passes)
         if tracker.method != "hc" and tracker.detector is not None:
@@ -285,6 +337,8 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         finalists.append({"candidate": int(i), "energy": round(float(e), 1),
                           "score": round(score, 1),
                           "from": "proposals" if i >= n_grid else "grid"})
+        if bend_of(i) >= 0:
+            finalists[-1]["bend"] = list(BEND_POSES)[bend_of(i)]
         if best is None or score < best[0]:
             best = (score, i, x, e)
     _, i, x, e = best
@@ -295,7 +349,11 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
             "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
             "finalists": finalists, "facing": told}
     if legs:
-        info["chosen_legs"] = ["down", *LEG_POSES][i // n_legs_down] if i < n_grid else None
+        info["chosen_legs"] = (["down", *LEG_POSES][(i % n_legs) // n_legs_down] if i < n_grid
+                               else None)
+    if bends:
+        info["chosen_bend"] = (None if i >= n_grid else "straight" if i < n_legs
+                               else list(BEND_POSES)[(i - n_legs) // n_legs_down])
     if told != "auto":
         # near profile the told side does not settle front and back: the check then runs
         info["facing_clear"] = clearly_facing(x, told, up, g.facing_margin)

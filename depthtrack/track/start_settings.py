@@ -14,7 +14,8 @@ from .setting_checks import power_of_two as _power_of_two
 
 #: Which way the person faces at the start (:attr:`StartSettings.facing`).
 FACINGS = ("auto", "camera", "away")
-#: Which global searches try raised legs (:attr:`StartSettings.legs`).
+#: Which global searches try raised legs (:attr:`StartSettings.legs`) or bent bodies
+#: (:attr:`StartSettings.bends`).
 LEG_SEARCHES = ("never", "recovery", "always")
 
 
@@ -93,6 +94,17 @@ class StartSettings:
         way, 8 cm, 41 below). On dev "recovery" helped the kicks (90_05 seeds 1 and 2, +8
         and +14 points) and hurt a runner (02_03 seeds 1 and 2, -12 and -22): a stride
         fits a raised leg too, with the wrong leg (README, "Lost and found"). So "never".
+    bends : {"never", "recovery", "always"}
+        Which global searches also try every grid candidate bent at the hips
+        (:data:`~.start.BEND_POSES`: a pike and a seated body, three times the grid): a
+        recovery's, or also the start's. The grid's bodies are straight; a body folded
+        forward with hands and feet on the floor was reached only through the recogniser's
+        proposals, which are poorest there (train 144_30, a sun salutation: start and
+        recoveries 70 to 85 cm off). README, "Bent bodies".
+    bend_shortlist, bend_finalists : int
+        With ``bends``, the best candidates of each bent body refined on the root and then
+        on every joint, on top of (not among) the straight grid's ``shortlist`` and
+        ``finalists``: the straight search is unchanged, a bent body wins only by its score.
     """
 
     passes: int = 3
@@ -113,6 +125,9 @@ class StartSettings:
     complete_fraction: float = 0.7
     complete_frames: int = 10
     legs: str = "never"
+    bends: str = "never"
+    bend_shortlist: int = 6
+    bend_finalists: int = 2
 
     def __post_init__(self):
         _check(0.0 <= self.complete_fraction <= 1.0, f"StartSettings.complete_fraction must "
@@ -121,8 +136,9 @@ class StartSettings:
                                                f"least 1, not {self.complete_frames}")
         _one_of(self, "facing", FACINGS)
         _one_of(self, "legs", LEG_SEARCHES)
+        _one_of(self, "bends", LEG_SEARCHES)
         _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
-                  "root_passes", "finalists")
+                  "root_passes", "finalists", "bend_shortlist", "bend_finalists")
         _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",
                   allow_zero=True)
         _check(0.0 <= self.facing_margin < 90.0, f"StartSettings.facing_margin must be in "
