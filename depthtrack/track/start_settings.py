@@ -17,6 +17,7 @@ FACINGS = ("auto", "camera", "away")
 #: Which global searches try raised legs (:attr:`StartSettings.legs`) or bent bodies
 #: (:attr:`StartSettings.bends`).
 LEG_SEARCHES = ("never", "recovery", "always")
+BEND_SEARCHES = ("never", "start", "recovery", "always")
 
 
 @dataclass(frozen=True)
@@ -94,10 +95,10 @@ class StartSettings:
         way, 8 cm, 41 below). On dev "recovery" helped the kicks (90_05 seeds 1 and 2, +8
         and +14 points) and hurt a runner (02_03 seeds 1 and 2, -12 and -22): a stride
         fits a raised leg too, with the wrong leg (README, "Lost and found"). So "never".
-    bends : {"never", "recovery", "always"}
+    bends : {"never", "start", "recovery", "always"}
         Which global searches also try every grid candidate bent at the hips
-        (:data:`~.start.BEND_POSES`: a pike and a seated body, three times the grid): a
-        recovery's, or also the start's. The grid's bodies are straight; a body folded
+        (:data:`~.start.BEND_POSES`: a pike and a seated body, three times the grid): the
+        automatic start's, a recovery's, or both. The grid's bodies are straight; a body folded
         forward with hands and feet on the floor was reached only through the recogniser's
         proposals, which are poorest there (train 144_30, a sun salutation: start and
         recoveries 70 to 85 cm off). README, "Bent bodies".
@@ -136,7 +137,7 @@ class StartSettings:
                                                f"least 1, not {self.complete_frames}")
         _one_of(self, "facing", FACINGS)
         _one_of(self, "legs", LEG_SEARCHES)
-        _one_of(self, "bends", LEG_SEARCHES)
+        _one_of(self, "bends", BEND_SEARCHES)
         _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
                   "root_passes", "finalists", "bend_shortlist", "bend_finalists")
         _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",

@@ -211,7 +211,7 @@ class Tracker:
         else:
             x, e, info = global_search(self, energy, frame,
                                        legs=self.settings.start.legs == "always",
-                                       bends=self.settings.start.bends == "always")
+                                       bends=self.settings.start.bends in ("start", "always"))
             info = {"mode": "automatic", **info, "energy": float(e)}
         state = state.logged({"energy": e, "cost": unexplained(energy, x)}, pose=x,
                              velocity=np.zeros(self.body.dof), init_info=info,
