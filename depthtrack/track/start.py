@@ -11,6 +11,11 @@ With the part recogniser on (:class:`~.settings.ProposalSettings`), poses fitted
 joint proposals join the candidates and always reach the shortlist -- a start in any
 orientation, lying or upside down -- and every finalist's score also counts the share of the
 trunk proposals it disagrees with (:func:`~.proposals.disagreement`).
+
+With :attr:`StartSettings.bends` the grid is also tried bent at the hips
+(:data:`BEND_POSES`), each bent body turned so that its chord from feet to head lies along
+the axes the straight body's trunk lies along; the bent candidates get their own shortlist
+and finalists, so they change the result only where one of them scores best.
 """
 from __future__ import annotations
 
@@ -243,7 +248,9 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     legs : bool
         Also try every grid candidate with each of :data:`LEG_POSES`.
     bends : bool
-        Also try every grid candidate with each of :data:`BEND_POSES` (after ``legs``).
+        Also try the grid with each of :data:`BEND_POSES` (feet to head along its axes,
+        :func:`candidate_poses`), heard on their own shortlist and finalists
+        (:attr:`StartSettings.bend_shortlist`, :attr:`StartSettings.bend_finalists`).
 
     Returns
     -------
