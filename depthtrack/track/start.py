@@ -346,8 +346,10 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
                           "from": "proposals" if i >= n_grid else "grid"})
         if bend_of(i) >= 0:
             finalists[-1]["bend"] = list(BEND_POSES)[bend_of(i)]
-        if best is None or score < best[0]:
-            best = (score, i, x, e)
+        # a bent body must win clearly: on a near tie the straight start stands
+        key = score + g.bend_margin * abs(score) if bend_of(i) >= 0 else score
+        if best is None or key < best[0]:
+            best = (key, i, x, e)
     _, i, x, e = best
     info = {"candidates": int(len(poses)), "orientations": int(n_rot),
             "proposal_candidates": int(len(poses) - n_grid),
