@@ -1,13 +1,11 @@
 """A body folded over with hands and feet on the floor: the straight grid of the global search
 does not reach it, the bent bodies (``StartSettings.bends``) do."""
 import numpy as np
-import pytest
 
 from depthtrack.body import BodyModel
-from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.body.rotations import rotvec_to_matrix
-from depthtrack.body.skeleton import MODEL_UP
-from depthtrack.contract import JOINT_NAMES
+from depthtrack.body.skeleton import MODEL_UP, POSE_INDEX
+from depthtrack.contract import JOINT_INDEX
 from depthtrack.track import TrackerSettings
 from depthtrack.track.start import BEND_POSES, candidate_poses, head_to_feet_turn
 from depthtrack.track.tracker import Tracker
@@ -37,8 +35,8 @@ def test_bent_candidates_lie_feet_to_head_along_the_search_axes():
         # the same orientations: the straight body's trunk and the bent body's feet-to-head
         # chord point the same way
         J = body.joint_positions(bent)
-        chord = J[:, JOINT_NAMES.index("head")] - 0.5 * (J[:, JOINT_NAMES.index("l_ankle")]
-                                                         + J[:, JOINT_NAMES.index("r_ankle")])
+        chord = J[:, JOINT_INDEX["head"]] - 0.5 * (J[:, JOINT_INDEX["l_ankle"]]
+                                                   + J[:, JOINT_INDEX["r_ankle"]])
         chord /= np.linalg.norm(chord, axis=1, keepdims=True)
         trunk = rotvec_to_matrix(straight[:, 3:6]) @ MODEL_UP
         assert np.min(np.sum(chord * trunk, axis=1)) > 0.999

@@ -13,8 +13,8 @@ truth fit's is a failure of the search, not of the likelihood.
 ``SEQ``: a synthesized sequence with ``groundtruth/joints.csv``; ``TRACK``: a track of it
 (``depthtrack track`` / ``eval --tracks-out``: ``body.json``, ``poses.npz``); ``--legs``:
 the search also tries raised legs (``StartSettings.legs``); ``--bends``: bodies bent at the
-hips (``StartSettings.bends``). Example (README, "Lost and
-found"): dev 90_05 seed 1, frame 40.
+hips (``StartSettings.bends``). Example (README, "Lost and found"): dev 90_05 seed 1, frame
+40.
 """
 from __future__ import annotations
 
@@ -69,8 +69,8 @@ def main(argv=None) -> int:
 
         line(f"frame {f - 1}'s pose", previous)
         line(f"frame {f}'s tracked pose", poses[f])
-        line("search" + (" with legs" if args.legs else "") + (" with bends" if args.bends else ""),
-             found)
+        tried = (" with legs" if args.legs else "") + (" with bends" if args.bends else "")
+        line("search" + tried, found)
         line("truth fit", fitted)
         line("truth fit, climbed", climbed)
         print("finalists:", ", ".join(f"{d['from']} {d['energy']}" for d in info["finalists"]))

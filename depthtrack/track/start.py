@@ -23,7 +23,7 @@ import numpy as np
 
 from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
 from ..body.skeleton import MODEL_FORWARD, MODEL_UP, POSE_INDEX
-from ..contract import JOINT_NAMES
+from ..contract import JOINT_INDEX
 from ..errors import InputError
 from ..motion.retarget import rotation_between
 from .observation import robust_points
@@ -178,9 +178,8 @@ def head_to_feet_turn(render_body, pose) -> np.ndarray:
     """``(3, 3)``: the rotation taking ``pose``'s (root unturned) chord from the ankles'
     midpoint to the head onto the model's up axis (the identity for a straight body)."""
     joints = render_body.joint_positions(pose)
-    names = list(JOINT_NAMES)
-    feet = 0.5 * (joints[names.index("l_ankle")] + joints[names.index("r_ankle")])
-    chord = joints[names.index("head")] - feet
+    feet = 0.5 * (joints[JOINT_INDEX["l_ankle"]] + joints[JOINT_INDEX["r_ankle"]])
+    chord = joints[JOINT_INDEX["head"]] - feet
     return rotation_between(chord / np.linalg.norm(chord), MODEL_UP)
 
 

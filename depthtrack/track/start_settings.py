@@ -98,10 +98,12 @@ class StartSettings:
     bends : {"never", "start", "recovery", "always"}
         Which global searches also try every grid candidate bent at the hips
         (:data:`~.start.BEND_POSES`: a pike and a seated body, three times the grid): the
-        automatic start's, a recovery's, or both. The grid's bodies are straight; a body folded
-        forward with hands and feet on the floor was reached only through the recogniser's
-        proposals, which are poorest there (train 144_30, a sun salutation: start and
-        recoveries 70 to 85 cm off). README, "Bent bodies".
+        automatic start's, a recovery's, or both. The grid's bodies are straight; a body
+        folded forward with hands and feet on the floor was reached only through the
+        recogniser's proposals, which are poorest there (train 144_30, a sun salutation: start and
+        recoveries 70 to 85 cm off; with the bent bodies 92 and 94 % of joints within
+        10 cm). "start" by default since 2026-11-27 (with ``bend_margin``; dev 89.2 ->
+        89.3 %, about 24k more candidates per start): README, "Bent bodies".
     bend_shortlist, bend_finalists : int
         With ``bends``, the best candidates of each bent body refined on the root and then
         on every joint, on top of (not among) the straight grid's ``shortlist`` and
