@@ -357,8 +357,9 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
             "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
             "finalists": finalists, "facing": told}
     if legs:
-        info["chosen_legs"] = (["down", *LEG_POSES][(i % n_legs) // n_legs_down] if i < n_grid
-                               else None)
+        # the bent blocks are built from the straight grid, legs down
+        info["chosen_legs"] = (["down", *LEG_POSES][i // n_legs_down] if i < n_legs
+                               else "down" if i < n_grid else None)
     if bends:
         info["chosen_bend"] = (None if i >= n_grid else "straight" if i < n_legs
                                else list(BEND_POSES)[(i - n_legs) // n_legs_down])
