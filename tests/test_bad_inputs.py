@@ -115,7 +115,8 @@ def test_real_processes_refuse_in_one_line(base, argv_key):
             "out": "out-report-is-seq"}[argv_key]
     argv, expect, out = CASES[name](_fresh(base, argv_key))
     before = snapshot(out)
-    env = dict(os.environ, PYTHONPATH=str(REPO))
+    # the repository first, the caller's own path after it (packages installed outside the venv)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
     proc = subprocess.run([sys.executable, "-m", "depthtrack", *argv], capture_output=True, text=True, env=env,
                           timeout=120)
     assert proc.returncode == 2, proc.stderr
