@@ -46,19 +46,53 @@ def test_bent_candidates_lie_feet_to_head_along_the_search_axes():
     assert np.allclose(head_to_feet_turn(body, np.zeros(body.dof)), np.eye(3), atol=0.05)
 
 
-def test_a_body_folded_over_is_found_from_the_bent_candidates(tmp_path):
+def _start(body, poses, tmp_path, settings, azimuth):
+    """Synthesize ``poses`` (SR4000, ToF noise) and start on frame 0: ``(joint errors (15,), init info)``."""
     from depthtrack.io import open_sequence
     from depthtrack.synth.generate import synthesize
 
-    body = BodyModel.default(height=1.75, mesh="full")
-    synthesize(tmp_path / "seq", body, _down_dog(body), fps=25.0, camera="sr4000", azimuth=90.0,
-               noise="tof", seed=1)
-    seq = open_sequence(tmp_path / "seq")
-    settings = TrackerSettings().updated({"start": {"bends": "start"}})
+    path = tmp_path / f"seq{azimuth:g}"
+    if not path.exists():
+        synthesize(path, body, poses, fps=25.0, camera="sr4000", azimuth=azimuth, noise="tof",
+                   seed=1)
+    seq = open_sequence(path)
     with Tracker(BodyModel.default(height=1.75), seq.camera, settings=settings) as tracker:
         tracker.init(seq.depth(0))
         joints = tracker.body.joint_positions(tracker.pose)
         info = tracker.describe()["initialisation"]
-    err = np.linalg.norm(joints - seq.joints[0], axis=1)
+    return np.linalg.norm(joints - seq.joints[0], axis=1), info
+
+
+def test_a_body_folded_over_is_found_from_the_bent_candidates(tmp_path):
+    body = BodyModel.default(height=1.75, mesh="full")
+    # the default: the straight start leaves much of the person unexplained, so the gate
+    # opens and a bent body wins
+    err, info = _start(body, _down_dog(body), tmp_path, TrackerSettings(), 90.0)
     assert err.mean() < 0.08, err
     assert info["chosen_from"] == "grid" and info["chosen_bend"] in BEND_POSES
+    gate = info["bend_gate"]
+    assert gate["searched"] and gate["unexplained"] > TrackerSettings().start.bend_gate
+    # without the bent bodies the same start is far off
+    never = TrackerSettings().updated({"start": {"bends": "never"}})
+    err, info = _start(body, _down_dog(body), tmp_path, never, 90.0)
+    assert err.mean() > 0.3 and "bend_gate" not in info
+
+
+def test_an_upright_start_keeps_the_gate_shut(tmp_path):
+    """A person standing: the straight start explains the frame, the bent bodies are not
+    searched, and the start is the one without them."""
+    from depthtrack.synth.procedural import ground_lock
+
+    body = BodyModel.default(height=1.75, mesh="full")
+    standing = np.zeros((2, body.dof))
+    standing[:, POSE_INDEX["l_shoulder_rz"]], standing[:, POSE_INDEX["r_shoulder_rz"]] = 0.3, -0.3
+    standing = ground_lock(body, standing)
+    err, info = _start(body, standing, tmp_path, TrackerSettings(), 30.0)
+    assert err.mean() < 0.05, err
+    gate = info["bend_gate"]
+    assert not gate["searched"] and gate["unexplained"] < TrackerSettings().start.bend_gate
+    assert info["chosen_bend"] == "straight"
+    assert not any("bend" in f for f in info["finalists"])
+    never = TrackerSettings().updated({"start": {"bends": "never"}})
+    err_never, info_never = _start(body, standing, tmp_path, never, 30.0)
+    assert np.array_equal(err, err_never) and info["finalists"] == info_never["finalists"]

@@ -30,7 +30,7 @@ from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
 from depthtrack.track.heading import (facing_direction, fit_joints, limb_swapped_twins,  # noqa: E402
                                       swapped_twins)
-from depthtrack.track.judge import unexplained  # noqa: E402
+from depthtrack.track.energy import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
 from track_replay import frame_energy, read_track, track_parser  # noqa: E402

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..body.skeleton import JOINT_ID
+from ..likelihood import fixed_and_empty_costs
 
 #: Parameters of the spine's rotation vector in a pose (the chest against the pelvis),
 #: from the skeleton's joint order (joint j's rotation is ``3 + 3j .. 5 + 3j``).
@@ -123,3 +124,13 @@ class Energy:
     def one(self, pose) -> float:
         """Energy of one pose ``(48,)``."""
         return float(self(np.asarray(pose)[None])[0])
+
+
+def unexplained(energy, pose) -> float:
+    """Share of the observation's cost that ``pose (48,)`` leaves unexplained, against the
+    observation held by ``energy``'s renderer: ``(c(x) - c_fixed) / (c_empty - c_fixed)``
+    (:mod:`.judge`; about 0.1 - 0.3 on a good fit, near 1 when lost)."""
+    c = float(energy.likelihood_costs(np.asarray(pose)[None])[0])
+    r = energy.renderer
+    fixed, empty = fixed_and_empty_costs(r.observed_tile, r.params, r.background_tile)
+    return (c - fixed) / max(empty - fixed, 1e-9)

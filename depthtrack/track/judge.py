@@ -19,19 +19,10 @@ import time
 import numpy as np
 
 from ..errors import InputError
-from ..likelihood import fixed_and_empty_costs
+from .energy import unexplained
 from .heading import facing_direction, long_axis
 from .proposals import disagreement, frame_proposals
 from .start import global_search
-
-
-def unexplained(energy, pose) -> float:
-    """Share of the observation's cost that ``pose (48,)`` leaves unexplained (module docstring),
-    against the observation held by ``energy``'s renderer."""
-    c = float(energy.likelihood_costs(np.asarray(pose)[None])[0])
-    r = energy.renderer
-    fixed, empty = fixed_and_empty_costs(r.observed_tile, r.params, r.background_tile)
-    return (c - fixed) / max(empty - fixed, 1e-9)
 
 
 def is_lost(cost: float, recent, settings) -> bool:

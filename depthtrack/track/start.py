@@ -15,7 +15,9 @@ trunk proposals it disagrees with (:func:`~.proposals.disagreement`).
 With :attr:`StartSettings.bends` the grid is also tried bent at the hips
 (:data:`BEND_POSES`), each bent body turned so that its chord from feet to head lies along
 the axes the straight body's trunk lies along; the bent candidates get their own shortlist
-and finalists, so they change the result only where one of them scores best.
+and finalists, so they change the result only where one of them scores best. They are
+searched after the straight search, and only when its best finalist leaves more than
+:attr:`StartSettings.bend_gate` of the observation unexplained.
 """
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ from ..body.skeleton import MODEL_FORWARD, MODEL_UP, POSE_INDEX
 from ..contract import JOINT_INDEX
 from ..errors import InputError
 from ..motion.retarget import rotation_between
+from .energy import unexplained
 from .observation import robust_points
 from .propagate import associate_stage
 from .proposals import disagreement, frame_proposals, proposal_candidates
@@ -249,7 +252,9 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     bends : bool
         Also try the grid with each of :data:`BEND_POSES` (feet to head along its axes,
         :func:`candidate_poses`), heard on their own shortlist and finalists
-        (:attr:`StartSettings.bend_shortlist`, :attr:`StartSettings.bend_finalists`).
+        (:attr:`StartSettings.bend_shortlist`, :attr:`StartSettings.bend_finalists`), when
+        the straight search's best leaves more than :attr:`StartSettings.bend_gate` of the
+        observation unexplained (``info["bend_gate"]``).
 
     Returns
     -------
@@ -271,11 +276,6 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     n_legs_down = len(poses)
     if legs:
         poses = with_leg_poses(poses)
-    n_legs = len(poses)
-    if bends:
-        poses = np.concatenate([poses] + [
-            candidate_poses(points, up, centre, tracker.render_body, tracker.settings, bend)[0]
-            for bend in BEND_POSES])
     n_grid = len(poses)
     p = tracker.settings.propose
     proposals = frame_proposals(tracker, frame)
@@ -301,36 +301,31 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
                 + 2.0 * pixels * wrong_side(x, told, up, g.facing_margin))
 
     order = np.argsort(energies + heading_cost(poses))
-
-    def bend_of(i):
-        """Which of :data:`BEND_POSES` candidate ``i`` is (-1: straight or from proposals)."""
-        return (int(i) - n_legs) // n_legs_down if n_legs <= i < n_grid else -1
-
-    # the bent bodies are heard on their own, so the straight search is the same with or
-    # without them: they win only by the final score
-    shortlist = [i for i in order if bend_of(i) < 0][:g.shortlist]
+    shortlist = list(order[:g.shortlist])
     ours = [i for i in order if i >= n_grid]
     if ours and ours[0] not in shortlist:
         shortlist.append(ours[0])          # the recogniser's best start always gets a hearing
-    for b in range(len(BEND_POSES) if bends else 0):
-        shortlist += [i for i in order if bend_of(i) == b][:g.bend_shortlist]
     climber = tracker.climbers.start
     root_blocks = climber.blocks[:g.root_blocks]
-    coarse = []
-    for i in shortlist:
-        x, e = climb(energy, climber, poses[i], rec, start_energy=energies[i], blocks=root_blocks,
-                     passes=g.root_passes)
-        coarse.append((e, int(i), x))
-    coarse.sort(key=lambda c: c[0])
-    best = None
-    finalists = []
-    chosen = [c for c in coarse if bend_of(c[1]) < 0][:g.finalists]
+
+    def refine_root(candidates, starts, picks):
+        """``[(energy, index, pose)]`` of ``candidates[picks]`` climbed on the root, lowest first."""
+        coarse = [(*climb(energy, climber, candidates[i], rec, start_energy=starts[i],
+                          blocks=root_blocks, passes=g.root_passes)[::-1], int(i))
+                  for i in picks]
+        return [(e, i, x) for e, x, i in sorted(coarse, key=lambda c: c[0])]
+
+    coarse = refine_root(poses, energies, shortlist)
+    chosen = coarse[:g.finalists]
     from_proposals = [c for c in coarse if c[1] >= n_grid]
     if from_proposals and all(c[1] < n_grid for c in chosen):
         chosen.append(from_proposals[0])     # the recogniser's best guess always gets a hearing
-    for b in range(len(BEND_POSES) if bends else 0):
-        chosen += [c for c in coarse if bend_of(c[1]) == b][:g.bend_finalists]
-    for e, i, x in chosen:
+    finalists = []
+    best = None
+
+    def hear(e, x, tag, margin=0.0):
+        """Climb a finalist on every joint (and associate it), score it, keep the best."""
+        nonlocal best
         x, e = climb(energy, climber, x, rec, start_energy=e, passes=g.passes)
         if tracker.method != "hc" and tracker.detector is not None:
             x, e, _ = associate_stage(tracker, energy, frame, x, e)
@@ -340,29 +335,53 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
             off, _ = disagreement(tracker.body.joint_positions(x), proposals, p.min_confidence,
                                   p.distance)
             score += p.start_weight * pixels * float(off)
+        kind, i = tag
         finalists.append({"candidate": int(i), "energy": round(float(e), 1),
                           "score": round(score, 1),
-                          "from": "proposals" if i >= n_grid else "grid"})
-        if bend_of(i) >= 0:
-            finalists[-1]["bend"] = list(BEND_POSES)[bend_of(i)]
+                          "from": "proposals" if kind == "proposals" else "grid"})
+        if kind != "grid" and kind != "proposals":
+            finalists[-1]["bend"] = kind
         # a bent body must win clearly: on a near tie the straight start stands
-        key = score + g.bend_margin * abs(score) if bend_of(i) >= 0 else score
+        key = score + margin * abs(score)
         if best is None or key < best[0]:
-            best = (key, i, x, e)
-    _, i, x, e = best
-    info = {"candidates": int(len(poses)), "orientations": int(n_rot),
+            best = (key, tag, x, e)
+
+    for e, i, x in chosen:
+        hear(e, x, ("proposals" if i >= n_grid else "grid", i))
+    n_scored = len(poses)
+    gate = None
+    if bends:
+        # the bent bodies are heard on their own, after the straight search (which they do
+        # not change), and only when its best leaves much of the person unexplained
+        share = unexplained(energy, best[2])
+        gate = {"unexplained": round(share, 4), "threshold": g.bend_gate,
+                "searched": bool(share > g.bend_gate)}
+    if gate is not None and gate["searched"]:
+        bent = np.concatenate([candidate_poses(points, up, centre, tracker.render_body,
+                                               tracker.settings, bend)[0] for bend in BEND_POSES])
+        bent_energies = energy(bent)
+        n_scored += len(bent)
+        bent_order = np.argsort(bent_energies + heading_cost(bent))
+        for b, bend in enumerate(BEND_POSES):
+            # candidate k of ``bent`` is of block k // n_legs_down: the straight grid, bent
+            picks = [k for k in bent_order if k // n_legs_down == b][:g.bend_shortlist]
+            for e, k, x in refine_root(bent, bent_energies, picks)[:g.bend_finalists]:
+                hear(e, x, (bend, k), margin=g.bend_margin)
+    _, (kind, i), x, e = best
+    in_grid = kind != "proposals"
+    info = {"candidates": int(n_scored), "orientations": int(n_rot),
             "proposal_candidates": int(len(poses) - n_grid),
-            "chosen_from": "proposals" if i >= n_grid else "grid",
-            "chosen_orientation": int(i % n_rot) if i < n_grid else None,
-            "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if i < n_grid else None,
+            "chosen_from": "grid" if in_grid else "proposals",
+            "chosen_orientation": int(i % n_rot) if in_grid else None,
+            "chosen_arms": list(ARM_POSES)[(i // n_rot) % len(ARM_POSES)] if in_grid else None,
             "finalists": finalists, "facing": told}
     if legs:
         # the bent blocks are built from the straight grid, legs down
-        info["chosen_legs"] = (["down", *LEG_POSES][i // n_legs_down] if i < n_legs
-                               else "down" if i < n_grid else None)
+        info["chosen_legs"] = (None if not in_grid else "down" if kind != "grid"
+                               else ["down", *LEG_POSES][i // n_legs_down])
     if bends:
-        info["chosen_bend"] = (None if i >= n_grid else "straight" if i < n_legs
-                               else list(BEND_POSES)[(i - n_legs) // n_legs_down])
+        info["chosen_bend"] = None if not in_grid else "straight" if kind == "grid" else kind
+        info["bend_gate"] = gate
     if told != "auto":
         # near profile the told side does not settle front and back: the check then runs
         info["facing_clear"] = clearly_facing(x, told, up, g.facing_margin)

@@ -102,9 +102,9 @@ class StartSettings:
         folded forward with hands and feet on the floor was reached only through the
         recogniser's proposals, which are poorest there (train 144_30, a sun salutation: start and
         recoveries 70 to 85 cm off; with the bent bodies 92 and 94 % of joints within
-        10 cm). "start" passed the dev rule (with ``bend_margin``; dev 89.2 -> 89.3 %, about
-        24k more candidates per start) but stays off by default for now: it took the CI
-        suite from 11.5 to 16.7 minutes, past its 15. README, "Bent bodies".
+        10 cm). "start" (the default, with ``bend_gate``) passed the dev rule; without the
+        gate it cost about 24k more candidates on every start and took the CI suite from
+        11.5 to 16.7 minutes, past its 15. README, "Bent bodies".
     bend_shortlist, bend_finalists : int
         With ``bends``, the best candidates of each bent body refined on the root and then
         on every joint, on top of (not among) the straight grid's ``shortlist`` and
@@ -114,6 +114,15 @@ class StartSettings:
         (0.01). On dev two upright starts (a runner, a jump kick) took a bent body by 0.4 and
         0.03 % of the score, a tie, and their tracks parted from the default's by nine
         points either way; bodies that are bent won by 3 to 22 %.
+    bend_gate : float
+        With ``bends``, the bent bodies are searched only when the best straight finalist
+        leaves more than this share of the observation unexplained
+        (:func:`~.energy.unexplained`; 0 = always). The straight search runs first and is
+        the same either way, so a closed gate gives the start without bends, and costs one
+        candidate. The start's ``bend_gate`` info says the share and whether it searched.
+        0.25: set on train alone, just below the shares of the straight starts of train
+        144_30's "down dog" (0.290 and 0.259, seeds 1 and 2); upright starts leave 0.06 to
+        0.31 (dev: 2 of 39 above 0.25).
     """
 
     passes: int = 3
@@ -134,10 +143,11 @@ class StartSettings:
     complete_fraction: float = 0.7
     complete_frames: int = 10
     legs: str = "never"
-    bends: str = "never"
+    bends: str = "start"
     bend_shortlist: int = 6
     bend_finalists: int = 2
     bend_margin: float = 0.01
+    bend_gate: float = 0.25
 
     def __post_init__(self):
         _check(0.0 <= self.complete_fraction <= 1.0, f"StartSettings.complete_fraction must "
@@ -147,6 +157,8 @@ class StartSettings:
         _one_of(self, "facing", FACINGS)
         _one_of(self, "legs", LEG_SEARCHES)
         _one_of(self, "bends", BEND_SEARCHES)
+        _check(0.0 <= self.bend_gate <= 1.0, f"StartSettings.bend_gate must be in [0, 1], "
+                                             f"not {self.bend_gate}")
         _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
                   "root_passes", "finalists", "bend_shortlist", "bend_finalists")
         _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",

@@ -41,9 +41,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
-from .energy import Energy
+from .energy import Energy, unexplained
 from .evidence import PartModel
-from .judge import judge_frame, loss_reason, proposal_check, recover, unexplained
+from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
 from .rechecks import recheck_stage, turned_start
