@@ -78,7 +78,7 @@ def test_a_body_folded_over_is_found_from_the_bent_candidates(tmp_path):
     assert err.mean() > 0.3 and "bend_gate" not in info
 
 
-def test_an_upright_start_keeps_the_gate_shut(tmp_path):
+def test_an_upright_start_keeps_the_gate_shut(tmp_path, capsys):
     """A person standing: the straight start explains the frame, the bent bodies are not
     searched, and the start is the one without them."""
     from depthtrack.synth.procedural import ground_lock
@@ -96,3 +96,18 @@ def test_an_upright_start_keeps_the_gate_shut(tmp_path):
     never = TrackerSettings().updated({"start": {"bends": "never"}})
     err_never, info_never = _start(body, standing, tmp_path, never, 30.0)
     assert np.array_equal(err, err_never) and info["finalists"] == info_never["finalists"]
+    # tools/start_gate.py replays the same start and says so, one JSON line per sequence
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "start_gate", Path(__file__).resolve().parent.parent / "tools" / "start_gate.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    assert tool.main([str(tmp_path / "seq30")]) == 0
+    line = json.loads(capsys.readouterr().out)
+    assert line["unexplained"] == gate["unexplained"] and line["searched"] is False
+    assert line["error_cm"] == round(100 * float(err.mean()), 1) and line["bent"] == []
+    assert tool.main([str(tmp_path / "missing")]) == 2
+    assert "missing" in capsys.readouterr().err

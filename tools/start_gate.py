@@ -3,8 +3,9 @@
 For every SEQ, the global search runs as the trial's start runs it (the template body at
 the sequence's height, ``hc+ep``, frame 0) with the given settings, and one JSON line says
 how much of the observation the best straight finalist leaves unexplained, whether the bent
-bodies were searched (``StartSettings.bend_gate``), which body won and the finalists'
-scores. A start that waits for the whole person (the person not complete on frame 0) cannot
+bodies were searched (``StartSettings.bend_gate``), which body won, the finalists'
+scores and, where the sequence has ground truth, the start's mean joint error (cm) and share
+of joints within 10 cm. A start that waits for the whole person (the person not complete on frame 0) cannot
 be replayed so: its line says ``"failed"``.
 
     .venv/bin/python tools/start_gate.py SEQ [SEQ ...] [--settings JSON]
@@ -17,6 +18,8 @@ import argparse
 import json
 import pathlib
 import sys
+
+import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
@@ -38,11 +41,17 @@ def start_line(path: pathlib.Path, settings: TrackerSettings) -> dict:
         except InputError as exc:
             return {"seq": path.name, "failed": str(exc)}
         info = tracker.describe()["initialisation"]
+        joints = np.asarray(tracker.body.joint_positions(tracker.pose))
     gate = info.get("bend_gate") or {}
-    return {"seq": path.name, "unexplained": gate.get("unexplained"),
+    line = {"seq": path.name, "unexplained": gate.get("unexplained"),
             "searched": gate.get("searched"), "chosen_bend": info.get("chosen_bend"),
             "straight": [f["score"] for f in info["finalists"] if "bend" not in f],
             "bent": [[f["bend"], f["score"]] for f in info["finalists"] if "bend" in f]}
+    if seq.joints is not None:
+        err = np.linalg.norm(joints - seq.joints[0], axis=1)
+        line.update(error_cm=round(100 * float(err.mean()), 1),
+                    within_10cm=round(float((err < 0.1).mean()), 3))
+    return line
 
 
 def main(argv=None) -> int:
