@@ -310,10 +310,12 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
 
     def refine_root(candidates, starts, picks):
         """``[(energy, index, pose)]`` of ``candidates[picks]`` climbed on the root, lowest first."""
-        coarse = [(*climb(energy, climber, candidates[i], rec, start_energy=starts[i],
-                          blocks=root_blocks, passes=g.root_passes)[::-1], int(i))
-                  for i in picks]
-        return [(e, i, x) for e, x, i in sorted(coarse, key=lambda c: c[0])]
+        coarse = []
+        for i in picks:
+            x, e = climb(energy, climber, candidates[i], rec, start_energy=starts[i],
+                         blocks=root_blocks, passes=g.root_passes)
+            coarse.append((e, int(i), x))
+        return sorted(coarse, key=lambda c: c[0])
 
     coarse = refine_root(poses, energies, shortlist)
     chosen = coarse[:g.finalists]
@@ -339,7 +341,7 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         finalists.append({"candidate": int(i), "energy": round(float(e), 1),
                           "score": round(score, 1),
                           "from": "proposals" if kind == "proposals" else "grid"})
-        if kind != "grid" and kind != "proposals":
+        if kind in BEND_POSES:
             finalists[-1]["bend"] = kind
         # a bent body must win clearly: on a near tie the straight start stands
         key = score + margin * abs(score)
@@ -356,7 +358,7 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         share = unexplained(energy, best[2])
         gate = {"unexplained": round(share, 4), "threshold": g.bend_gate,
                 "searched": bool(share > g.bend_gate)}
-    if gate is not None and gate["searched"]:
+    if gate and gate["searched"]:
         bent = np.concatenate([candidate_poses(points, up, centre, tracker.render_body,
                                                tracker.settings, bend)[0] for bend in BEND_POSES])
         bent_energies = energy(bent)
