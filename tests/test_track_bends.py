@@ -105,9 +105,11 @@ def test_an_upright_start_keeps_the_gate_shut(tmp_path, capsys):
         "start_gate", Path(__file__).resolve().parent.parent / "tools" / "start_gate.py")
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
-    assert tool.main([str(tmp_path / "seq30")]) == 0
+    assert tool.main([str(tmp_path / "seq30"), "--cue"]) == 0
     line = json.loads(capsys.readouterr().out)
     assert line["unexplained"] == gate["unexplained"] and line["searched"] is False
     assert line["error_cm"] == round(100 * float(err.mean()), 1) and line["bent"] == []
+    # standing straight: the hips open, by the truth and by the recogniser's proposals
+    assert line["hip_angle_true"] > 170 and line["hip_angle_proposals"] > 150
     assert tool.main([str(tmp_path / "missing")]) == 2
     assert "missing" in capsys.readouterr().err

@@ -5,10 +5,12 @@ the sequence's height, ``hc+ep``, frame 0) with the given settings, and one JSON
 how much of the observation the best straight finalist leaves unexplained, whether the bent
 bodies were searched (``StartSettings.bend_gate``), which body won, the finalists'
 scores and, where the sequence has ground truth, the start's mean joint error (cm) and share
-of joints within 10 cm. A start that waits for the whole person (the person not complete on frame 0) cannot
+of joints within 10 cm. ``--cue`` adds a candidate cue for a better gate (not used by the
+tracker): the angle neck - pelvis - knees' midpoint (degrees) of the recogniser's most
+confident proposals on frame 0 (the knees' midpoint is side-free), and of the true joints. A start that waits for the whole person (the person not complete on frame 0) cannot
 be replayed so: its line says ``"failed"``.
 
-    .venv/bin/python tools/start_gate.py SEQ [SEQ ...] [--settings JSON]
+    .venv/bin/python tools/start_gate.py SEQ [SEQ ...] [--settings JSON] [--cue]
 
 Example (README, "Bent bodies"): the train down dog opens the gate, an upright start does not.
 """
@@ -25,13 +27,38 @@ REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from depthtrack.body import BodyModel  # noqa: E402
+from depthtrack.contract import JOINT_INDEX  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
 
 
-def start_line(path: pathlib.Path, settings: TrackerSettings) -> dict:
+def hip_angle(neck, pelvis, l_knee, r_knee) -> float:
+    """Degrees between pelvis-to-neck and pelvis-to-knees' midpoint: ~180 standing straight,
+    ~90 folded at the hips; each argument ``(3,)``."""
+    up, down = neck - pelvis, 0.5 * (l_knee + r_knee) - pelvis
+    cos = up @ down / (np.linalg.norm(up) * np.linalg.norm(down))
+    return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+
+def proposal_hip_angle(depth, camera) -> float:
+    """:func:`hip_angle` of the recogniser's most confident proposal of each joint."""
+    from depthtrack.detect import segment_foreground
+    from depthtrack.detect.recognizer import joint_proposals, recognize
+
+    _, probs = recognize(depth, segment_foreground(depth, camera).mask, camera)
+    proposals = joint_proposals(depth, probs, camera)
+    pos, conf = np.asarray(proposals.positions), np.asarray(proposals.confidence)
+
+    def top(name):
+        j = JOINT_INDEX[name]
+        usable = np.where(np.isfinite(pos[j]).all(axis=1), conf[j], -1.0)
+        return pos[j, int(np.argmax(usable))]
+    return hip_angle(top("neck"), top("pelvis"), top("l_knee"), top("r_knee"))
+
+
+def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False) -> dict:
     """The replayed start of sequence ``path`` as one JSON-able dict (see the module docstring)."""
     seq = open_sequence(path)
     body = BodyModel.default(height=seq.subject_height or 1.75)
@@ -51,6 +78,12 @@ def start_line(path: pathlib.Path, settings: TrackerSettings) -> dict:
         err = np.linalg.norm(joints - seq.joints[0], axis=1)
         line.update(error_cm=round(100 * float(err.mean()), 1),
                     within_10cm=round(float((err < 0.1).mean()), 3))
+    if cue:
+        line["hip_angle_proposals"] = round(proposal_hip_angle(seq.depth(0), seq.camera))
+        if seq.joints is not None:
+            t = seq.joints[0]
+            line["hip_angle_true"] = round(hip_angle(*(t[JOINT_INDEX[n]] for n in
+                                                       ("neck", "pelvis", "l_knee", "r_knee"))))
     return line
 
 
@@ -63,6 +96,8 @@ def main(argv=None) -> int:
                         help="synthesized sequence directories")
     parser.add_argument("--settings", default="{}",
                         help='tracker settings as JSON, e.g. \'{"start": {"bend_gate": 1.0}}\'')
+    parser.add_argument("--cue", action="store_true",
+                        help="also the hip angle of the recogniser's proposals (and of the truth)")
     args = parser.parse_args(argv)
     try:
         settings = TrackerSettings().updated(json.loads(args.settings))
@@ -71,7 +106,7 @@ def main(argv=None) -> int:
         return 2
     for path in args.seqs:
         try:
-            line = start_line(path, settings)
+            line = start_line(path, settings, cue=args.cue)
         except (InputError, OSError) as exc:
             print(f"start_gate: {exc}", file=sys.stderr)
             return 2
