@@ -10,7 +10,8 @@ from depthtrack.contract import JOINT_INDEX
 from depthtrack.detect.recognizer import JointProposals
 from depthtrack.track import TrackerSettings
 from depthtrack.track.heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED
-from depthtrack.track.proposals import TRUNK, disagreement, proposal_candidates
+from depthtrack.track.proposals import (TRUNK, disagreement, hip_angle, proposal_candidates,
+                                        proposal_hip_angle)
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
 
@@ -46,6 +47,36 @@ def test_disagreement_is_side_free_and_counts_far_trunk_joints():
     # proposals below the confidence floor are not evidence at all
     off, checked = disagreement(moved, _proposals(joints, 0.001), 0.002, 0.3)
     assert checked == 0 and off == 0.0
+
+
+def test_hip_angle_of_the_proposals_reads_a_fold_at_the_hips():
+    # closed form: neck straight up, knees straight down -> 180; knees forward -> 90
+    up, o = np.array([0.0, 0.5, 0.0]), np.zeros(3)
+    assert hip_angle(up, o, -up, -up) == pytest.approx(180.0)
+    assert hip_angle(up, o, [0.0, 0.0, 0.4], [0.1, 0.0, 0.4]) == pytest.approx(90.0)
+    # batched: (2, 3) each -> (2,)
+    knees = np.array([-up, [0.0, 0.0, 1.0]])
+    assert hip_angle(np.stack([up, up]), np.zeros((2, 3)), knees, knees).tolist() == \
+        pytest.approx([180.0, 90.0])
+    body = BodyModel.default(height=1.75)
+    rest = np.zeros(48)
+    rest[2] = 3.0
+    straight = np.asarray(body.joint_positions(rest))
+    assert proposal_hip_angle(_proposals(straight)) > 170
+    folded = rest.copy()
+    folded[POSE_INDEX["l_hip_rx"]] = folded[POSE_INDEX["r_hip_rx"]] = -1.6
+    joints = np.asarray(body.joint_positions(folded))
+    assert 80 < proposal_hip_angle(_proposals(joints)) < 100
+    # the most confident proposal counts, not the first: a confident straight knee outvotes
+    props = _proposals(joints)
+    knees = [JOINT_INDEX["l_knee"], JOINT_INDEX["r_knee"]]
+    props.positions[knees, 1] = straight[knees]
+    props.confidence[knees, 1] = 0.05
+    assert proposal_hip_angle(props) > 170
+    # no neck proposal: no angle (the gate then reads the share alone)
+    props.positions[JOINT_INDEX["neck"]] = np.nan
+    props.confidence[JOINT_INDEX["neck"]] = 0.0
+    assert proposal_hip_angle(props) is None
 
 
 def test_poses_fitted_to_proposals_put_the_joints_there():

@@ -2,13 +2,15 @@
 
 For every SEQ, the global search runs as the trial's start runs it (the template body at
 the sequence's height, ``hc+ep``, frame 0) with the given settings, and one JSON line says
-how much of the observation the best straight finalist leaves unexplained, whether the bent
-bodies were searched (``StartSettings.bend_gate``), which body won, the finalists'
-scores and, where the sequence has ground truth, the start's mean joint error (cm) and share
-of joints within 10 cm. ``--cue`` adds a candidate cue for a better gate (not used by the
-tracker): the angle neck - pelvis - knees' midpoint (degrees) of the recogniser's most
-confident proposals on frame 0 (the knees' midpoint is side-free), and of the true joints. A start that waits for the whole person (the person not complete on frame 0) cannot
-be replayed so: its line says ``"failed"``.
+how much of the observation the best straight finalist leaves unexplained, the angle neck -
+pelvis - knees' midpoint (degrees) of the recogniser's most confident proposals on frame 0
+(``hip_angle``; the knees' midpoint is side-free), whether the bent bodies were searched
+(``StartSettings.bend_gate``, ``bend_hip_angle``), which body won, the finalists' scores
+and, where the sequence has ground truth, the start's mean joint error (cm) and share of
+joints within 10 cm. ``--cue`` adds the same angle of the true joints
+(``hip_angle_true``) and repeats the proposals' as ``hip_angle_proposals`` (its name before
+the tracker used it). A start that waits for the whole person (the person not complete on
+frame 0) cannot be replayed so: its line says ``"failed"``.
 
     .venv/bin/python tools/start_gate.py SEQ [SEQ ...] [--settings JSON] [--cue]
 
@@ -31,31 +33,8 @@ from depthtrack.contract import JOINT_INDEX  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.proposals import hip_angle  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
-
-
-def hip_angle(neck, pelvis, l_knee, r_knee) -> float:
-    """Degrees between pelvis-to-neck and pelvis-to-knees' midpoint: ~180 standing straight,
-    ~90 folded at the hips; each argument ``(3,)``."""
-    up, down = neck - pelvis, 0.5 * (l_knee + r_knee) - pelvis
-    cos = up @ down / (np.linalg.norm(up) * np.linalg.norm(down))
-    return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
-
-
-def proposal_hip_angle(depth, camera) -> float:
-    """:func:`hip_angle` of the recogniser's most confident proposal of each joint."""
-    from depthtrack.detect import segment_foreground
-    from depthtrack.detect.recognizer import joint_proposals, recognize
-
-    _, probs = recognize(depth, segment_foreground(depth, camera).mask, camera)
-    proposals = joint_proposals(depth, probs, camera)
-    pos, conf = np.asarray(proposals.positions), np.asarray(proposals.confidence)
-
-    def top(name):
-        j = JOINT_INDEX[name]
-        usable = np.where(np.isfinite(pos[j]).all(axis=1), conf[j], -1.0)
-        return pos[j, int(np.argmax(usable))]
-    return hip_angle(top("neck"), top("pelvis"), top("l_knee"), top("r_knee"))
 
 
 def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False) -> dict:
@@ -71,6 +50,7 @@ def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False)
         joints = np.asarray(tracker.body.joint_positions(tracker.pose))
     gate = info.get("bend_gate") or {}
     line = {"seq": path.name, "unexplained": gate.get("unexplained"),
+            "hip_angle": gate.get("hip_angle"),
             "searched": gate.get("searched"), "chosen_bend": info.get("chosen_bend"),
             "straight": [f["score"] for f in info["finalists"] if "bend" not in f],
             "bent": [[f["bend"], f["score"]] for f in info["finalists"] if "bend" in f]}
@@ -79,11 +59,11 @@ def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False)
         line.update(error_cm=round(100 * float(err.mean()), 1),
                     within_10cm=round(float((err < 0.1).mean()), 3))
     if cue:
-        line["hip_angle_proposals"] = round(proposal_hip_angle(seq.depth(0), seq.camera))
-        if seq.joints is not None:
-            t = seq.joints[0]
-            line["hip_angle_true"] = round(hip_angle(*(t[JOINT_INDEX[n]] for n in
-                                                       ("neck", "pelvis", "l_knee", "r_knee"))))
+        line["hip_angle_proposals"] = gate.get("hip_angle")
+    if cue and seq.joints is not None:
+        t = seq.joints[0]
+        line["hip_angle_true"] = round(float(hip_angle(*(t[JOINT_INDEX[n]] for n in
+                                                         ("neck", "pelvis", "l_knee", "r_knee")))))
     return line
 
 
@@ -97,7 +77,7 @@ def main(argv=None) -> int:
     parser.add_argument("--settings", default="{}",
                         help='tracker settings as JSON, e.g. \'{"start": {"bend_gate": 1.0}}\'')
     parser.add_argument("--cue", action="store_true",
-                        help="also the hip angle of the recogniser's proposals (and of the truth)")
+                        help="also the hip angle of the true joints")
     args = parser.parse_args(argv)
     try:
         settings = TrackerSettings().updated(json.loads(args.settings))

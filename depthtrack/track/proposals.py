@@ -55,6 +55,33 @@ def frame_proposals(tracker, frame):
     return frame.proposals
 
 
+def hip_angle(neck, pelvis, l_knee, r_knee):
+    """Degrees between pelvis-to-neck and pelvis-to-knees' midpoint: ``(..., 3)`` each ->
+    ``(...)``; about 180 standing straight, about 90 folded at the hips or seated (the knees'
+    midpoint is side-free)."""
+    up = np.asarray(neck, dtype=np.float64) - pelvis
+    down = 0.5 * (np.asarray(l_knee, dtype=np.float64) + r_knee) - pelvis
+    cos = np.sum(up * down, axis=-1) / (np.linalg.norm(up, axis=-1) * np.linalg.norm(down, axis=-1))
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def proposal_hip_angle(proposals):
+    """:func:`hip_angle` of the most confident proposal of neck, pelvis and each knee; None
+    where one of them has no proposal. The recogniser's trunk is reliable and a knee's side
+    does not matter here, so this tells a body folded at the hips from a straight one without
+    fitting a pose (the start's bend gate, :attr:`~.start_settings.StartSettings.bend_hip_angle`)."""
+    pos = np.asarray(proposals.positions, dtype=np.float64)
+    conf = np.asarray(proposals.confidence, dtype=np.float64)
+    tops = []
+    for name in ("neck", "pelvis", "l_knee", "r_knee"):
+        j = JOINT_INDEX[name]
+        usable = np.isfinite(pos[j]).all(axis=1) & (conf[j] > 0)
+        if not usable.any():
+            return None
+        tops.append(pos[j, int(np.argmax(np.where(usable, conf[j], -1.0)))])
+    return float(hip_angle(*tops))
+
+
 def confident(proposals, min_confidence: float):
     """``(positions (15, k, 3), usable (15, k) bool)``: proposals at least ``min_confidence``."""
     pos = np.asarray(proposals.positions, dtype=np.float64)

@@ -17,7 +17,8 @@ With :attr:`StartSettings.bends` the grid is also tried bent at the hips
 the axes the straight body's trunk lies along; the bent candidates get their own shortlist
 and finalists, so they change the result only where one of them scores best. They are
 searched after the straight search, and only when its best finalist leaves more than
-:attr:`StartSettings.bend_gate` of the observation unexplained.
+:attr:`StartSettings.bend_gate` of the observation unexplained or the recogniser's proposals
+fold the body at the hips (:attr:`StartSettings.bend_hip_angle`).
 """
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ from ..motion.retarget import rotation_between
 from .energy import unexplained
 from .observation import robust_points
 from .propagate import associate_stage
-from .proposals import disagreement, frame_proposals, proposal_candidates
+from .proposals import disagreement, frame_proposals, proposal_candidates, proposal_hip_angle
 from .search import climb
 
 #: Arm poses tried by the global search: (shoulder rx, left shoulder rz) in radians
@@ -254,7 +255,8 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         :func:`candidate_poses`), heard on their own shortlist and finalists
         (:attr:`StartSettings.bend_shortlist`, :attr:`StartSettings.bend_finalists`), when
         the straight search's best leaves more than :attr:`StartSettings.bend_gate` of the
-        observation unexplained (``info["bend_gate"]``).
+        observation unexplained or the recogniser's neck, pelvis and knees make an angle
+        below :attr:`StartSettings.bend_hip_angle` (``info["bend_gate"]``).
 
     Returns
     -------
@@ -356,8 +358,14 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         # the bent bodies are heard on their own, after the straight search (which they do
         # not change), and only when its best leaves much of the person unexplained
         share = unexplained(energy, best[2])
+        # the recogniser's opinion too: a fold it sees may be fitted by a straight body that
+        # explains the silhouette well enough (train 02_05)
+        hip = None if proposals is None else proposal_hip_angle(proposals)
+        folded = hip is not None and hip < g.bend_hip_angle
         gate = {"unexplained": round(share, 4), "threshold": g.bend_gate,
-                "searched": bool(share > g.bend_gate)}
+                "hip_angle": None if hip is None else round(hip, 1),
+                "hip_threshold": g.bend_hip_angle,
+                "searched": bool(share > g.bend_gate or folded)}
     if gate and gate["searched"]:
         bent = np.concatenate([candidate_poses(points, up, centre, tracker.render_body,
                                                tracker.settings, bend)[0] for bend in BEND_POSES])
