@@ -1,16 +1,19 @@
-"""The automatic start of each sequence's shape-fit trial, replayed on frame 0: the bend gate.
+"""The automatic start of each sequence's shape-fit trial, replayed: the bend gate.
 
 For every SEQ, the global search runs as the trial's start runs it (the template body at
-the sequence's height, ``hc+ep``, frame 0) with the given settings, and one JSON line says
-how much of the observation the best straight finalist leaves unexplained, the angle neck -
-pelvis - knees' midpoint (degrees) of the recogniser's most confident proposals on frame 0
+the sequence's height, ``hc+ep``, on the frame the start takes: the first with a person, or
+where the person enters the view a later one with enough of them,
+``StartSettings.complete_fraction``)
+with the given settings, and one JSON line says which frame (``frame``), how much of the
+observation the best straight finalist leaves unexplained, the angle neck - pelvis - knees'
+midpoint (degrees) of the recogniser's most confident proposals on that frame
 (``hip_angle``; the knees' midpoint is side-free), whether the bent bodies were searched
 (``StartSettings.bend_gate``, ``bend_hip_angle``), which body won, the finalists' scores
 and, where the sequence has ground truth, the start's mean joint error (cm) and share of
 joints within 10 cm. ``--cue`` adds the same angle of the true joints
 (``hip_angle_true``) and repeats the proposals' as ``hip_angle_proposals`` (its name before
-the tracker used it). A start that waits for the whole person (the person not complete on
-frame 0) cannot be replayed so: its line says ``"failed"``.
+the tracker used it). A sequence with nobody on any frame is not replayed: its line says
+``"failed"``.
 
     .venv/bin/python tools/start_gate.py SEQ [SEQ ...] [--settings JSON] [--cue]
 
@@ -33,8 +36,28 @@ from depthtrack.contract import JOINT_INDEX  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.loop import first_complete  # noqa: E402
+from depthtrack.track.observation import cut_by_border, visible_area  # noqa: E402
 from depthtrack.track.proposals import hip_angle  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
+
+
+def start_frame(tracker, seq):
+    """``(k, foreground)``: the frame the tracker's automatic start takes and its
+    segmentation -- the first frame with a person, or where the person enters the view the
+    first frame after it with enough of them (:attr:`StartSettings.complete_fraction`,
+    ``complete_uncut``);
+    ``(None, None)`` where no frame has a person."""
+    g = tracker.settings.start
+    first = next((i for i in range(len(seq))
+                  if tracker.person_present(tracker.segmenter(seq.depth(i), seq.camera))), None)
+    if first is None:
+        return None, None
+    end = min(len(seq), first + 1 + (g.complete_frames if g.complete_fraction > 0 else 0))
+    foregrounds = [tracker.segmenter(seq.depth(i), seq.camera) for i in range(first, end)]
+    k = first_complete([visible_area(f, seq.camera) for f in foregrounds], g.complete_fraction,
+                       [cut_by_border(f.mask) for f in foregrounds] if g.complete_uncut else None)
+    return first + k, foregrounds[k]
 
 
 def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False) -> dict:
@@ -42,26 +65,29 @@ def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False)
     seq = open_sequence(path)
     body = BodyModel.default(height=seq.subject_height or 1.75)
     with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=settings) as tracker:
+        k, fg = start_frame(tracker, seq)
+        if k is None:
+            return {"seq": path.name, "failed": "no person on any frame"}
         try:
-            tracker.init(seq.depth(0))
+            tracker.init(seq.depth(k), foreground=fg)
         except InputError as exc:
             return {"seq": path.name, "failed": str(exc)}
         info = tracker.describe()["initialisation"]
         joints = np.asarray(tracker.body.joint_positions(tracker.pose))
     gate = info.get("bend_gate") or {}
-    line = {"seq": path.name, "unexplained": gate.get("unexplained"),
+    line = {"seq": path.name, "frame": k, "unexplained": gate.get("unexplained"),
             "hip_angle": gate.get("hip_angle"),
             "searched": gate.get("searched"), "chosen_bend": info.get("chosen_bend"),
             "straight": [f["score"] for f in info["finalists"] if "bend" not in f],
             "bent": [[f["bend"], f["score"]] for f in info["finalists"] if "bend" in f]}
     if seq.joints is not None:
-        err = np.linalg.norm(joints - seq.joints[0], axis=1)
+        err = np.linalg.norm(joints - seq.joints[k], axis=1)
         line.update(error_cm=round(100 * float(err.mean()), 1),
                     within_10cm=round(float((err < 0.1).mean()), 3))
     if cue:
         line["hip_angle_proposals"] = gate.get("hip_angle")
     if cue and seq.joints is not None:
-        t = seq.joints[0]
+        t = seq.joints[k]
         line["hip_angle_true"] = round(float(hip_angle(*(t[JOINT_INDEX[n]] for n in
                                                          ("neck", "pelvis", "l_knee", "r_knee")))))
     return line

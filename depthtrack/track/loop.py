@@ -15,6 +15,7 @@ import numpy as np
 
 from ..body.facing import back_to_front, sides_exchanged
 from .heading import LIMB_SWAPS, settle_heading
+from .observation import cut_by_border
 from .observe import as_depth, person_present, visible_area
 from .settings import TrackerSettings
 from .state import TrackedFrame
@@ -124,6 +125,21 @@ def stream_poses(tracker, frames, init_pose=None):
     yield from held
 
 
+def first_complete(areas, fraction: float, cut=None) -> int:
+    """The frame a start waits for (:attr:`StartSettings.complete_fraction`): the index of
+    the first of ``areas`` (the person's visible area, m^2, frame by frame) that reaches
+    ``fraction`` of the largest -- and, with ``cut`` (one bool per frame: the person runs off
+    the image, :func:`~.observation.cut_by_border`), the first such frame not cut, where
+    there is one (:attr:`StartSettings.complete_uncut`)."""
+    need = fraction * max(areas)
+    enough = [k for k, a in enumerate(areas) if a >= need]
+    if cut is not None:
+        whole = [k for k in enough if not cut[k]]
+        if whole:
+            return whole[0]
+    return enough[0]
+
+
 def _complete_view(tracker, depth, foreground, take, pending):
     """Where an automatic start waits for more of the person (:attr:`StartSettings.
     complete_fraction`): ``(depth, foreground, early)``, the frame to start on (and its
@@ -132,16 +148,17 @@ def _complete_view(tracker, depth, foreground, take, pending):
 
     The next :attr:`StartSettings.complete_frames` frames are read ahead; the start is the
     first of this frame and them whose person covers at least ``complete_fraction`` of the
-    largest visible area (m^2) among them. Those after it are given back (``pending``).
+    largest visible area (m^2) among them (with ``complete_uncut``, the first such whose
+    person is clear of the image's edges, where one is: :func:`first_complete`). Those after
+    it are given back (``pending``).
     """
     g = tracker.settings.start
     camera = tracker.camera
     ahead = take(g.complete_frames)
     with tracker.recorder.timed("segment"):
         foregrounds = [foreground] + [tracker.segmenter(d, camera) for d in ahead]
-    areas = [visible_area(f, camera) for f in foregrounds]
-    need = g.complete_fraction * max(areas)
-    k = next(k for k, a in enumerate(areas) if a >= need)
+    k = first_complete([visible_area(f, camera) for f in foregrounds], g.complete_fraction,
+                       [cut_by_border(f.mask) for f in foregrounds] if g.complete_uncut else None)
     pending.extendleft(reversed(ahead[k:]))
     if k == 0:
         return depth, foreground, []

@@ -37,6 +37,16 @@ def visible_area(foreground, camera) -> float:
     return float(np.sum(camera.pixel_area(z)))
 
 
+def cut_by_border(mask, min_pixels: int = 3) -> bool:
+    """Whether a person's foreground ``mask (H, W) bool`` runs off the image: at least
+    ``min_pixels`` of it on the outermost rows and columns (a limb or half the body out of
+    view; a stray pixel or two is not)."""
+    mask = np.asarray(mask, dtype=bool)
+    edge = (int(mask[0].sum()) + int(mask[-1].sum()) + int(mask[1:-1, 0].sum())
+            + int(mask[1:-1, -1].sum()))
+    return edge >= min_pixels
+
+
 def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
     """No-reading pixels that are open space rather than missing readings: ``(H, W) bool``.
 

@@ -85,6 +85,13 @@ class StartSettings:
         other eleven dev motions no start waits, so their tracks are unchanged). 0 = off. A
         deferred start says by how many frames in its ``init_info`` (``deferred_frames``;
         ``summary.json``'s ``initialisation_details``).
+    complete_uncut : bool
+        With ``complete_fraction``, the start also waits, within the same frames, for the
+        first whose person is clear of the image's edges (:func:`~.observation.
+        cut_by_border`), where one is; where none is (a person too close to be seen whole)
+        the area alone decides. Named on dev 02_03 (a runner entering a Kinect v2's view
+        from 120 degrees): the area reached 0.7 on frame 2 with a leg and an arm still out
+        of the image, and the start there was 27 cm off.
     legs : {"never", "recovery", "always"}
         Which global searches also try every grid candidate with a leg raised
         (:data:`~.start.LEG_POSES`, five times the grid): a recovery's, or also the start's.
@@ -154,6 +161,7 @@ class StartSettings:
     facing_margin: float = 0.0
     complete_fraction: float = 0.7
     complete_frames: int = 10
+    complete_uncut: bool = True
     legs: str = "never"
     bends: str = "start"
     bend_shortlist: int = 6
