@@ -518,3 +518,51 @@ def test_the_recheck_climbs_only_the_twin_fits_lowest_before_climbing(squat):
         assert len(twins) == 2 and picked.shape == (want, 48)
         if want == 1:
             np.testing.assert_array_equal(picked[0], twins[int(np.argmin(energy(twins)))])
+
+
+def test_a_start_waits_for_the_person_clear_of_the_image_edge(squat):
+    """``complete_uncut``: of the frames with enough of the person, the start takes the first
+    whose person does not run off the image (dev 02_03: a runner entering the view had a leg
+    and an arm outside it on the frame the area alone chose)."""
+    import collections
+
+    from depthtrack.track.loop import _complete_view, first_complete
+    from depthtrack.track.observation import cut_by_border
+
+    mask = np.zeros((40, 50), dtype=bool)
+    mask[10:30, 20:30] = True
+    assert not cut_by_border(mask)
+    mask[15:20, 0:20] = True                        # an arm out of the left edge
+    assert cut_by_border(mask)
+    mask[15:20, 0] = False
+    mask[16:18, 0] = True                           # two stray pixels are not a cut
+    assert not cut_by_border(mask)
+    assert first_complete([0.5, 0.8, 1.0, 1.0], 0.7) == 1
+    assert first_complete([0.5, 0.8, 1.0, 1.0], 0.7, [False, True, True, False]) == 3
+    # nobody clear of the edges in the frames read ahead: the area alone decides
+    assert first_complete([0.5, 0.8, 1.0, 1.0], 0.7, [True] * 4) == 1
+
+    # the squat's first two frames moved left until the person's leftmost columns leave the
+    # image (most of the person still in view, so the area alone would start on frame 0)
+    c = squat.camera
+    depths = [squat.depth(i).copy() for i in range(8)]
+    with Tracker(BodyModel.default(height=1.75), c, fps=squat.fps) as tracker:
+        for k in range(2):
+            cols = np.flatnonzero(tracker.segmenter(depths[k], c).mask.any(axis=0))
+            s = int(cols[0]) + 3
+            shifted = np.empty_like(depths[k])
+            shifted[:, :-s], shifted[:, -s:] = depths[k][:, s:], depths[k][:, -1:]
+            depths[k] = shifted
+        fg0 = tracker.segmenter(depths[0], c)
+        assert cut_by_border(fg0.mask)
+
+        def view(uncut):
+            tracker.settings = TrackerSettings(start={"complete_uncut": uncut})
+            rest, pending = collections.deque(depths[1:]), collections.deque()
+            take = lambda n: [rest.popleft() for _ in range(min(n, len(rest)))]  # noqa: E731
+            return _complete_view(tracker, depths[0], fg0, take, pending)
+
+        start, _, early = view(True)
+        assert len(early) == 2 and start is depths[2]
+        start, _, early = view(False)
+        assert early == [] and start is depths[0]

@@ -91,7 +91,10 @@ class StartSettings:
         cut_by_border`), where one is; where none is (a person too close to be seen whole)
         the area alone decides. Named on dev 02_03 (a runner entering a Kinect v2's view
         from 120 degrees): the area reached 0.7 on frame 2 with a leg and an arm still out
-        of the image, and the start there was 27 cm off.
+        of the image, and the start there was 27 cm off. Off by default: on dev it moved
+        nine starts (02_03, cartwheel and 01_08, whose feet touch the image's bottom) and
+        lost 38 points on 02_03 seed 2 (a wrong heading switch on frame 20), README "A
+        person walking into view".
     legs : {"never", "recovery", "always"}
         Which global searches also try every grid candidate with a leg raised
         (:data:`~.start.LEG_POSES`, five times the grid): a recovery's, or also the start's.
@@ -161,7 +164,7 @@ class StartSettings:
     facing_margin: float = 0.0
     complete_fraction: float = 0.7
     complete_frames: int = 10
-    complete_uncut: bool = True
+    complete_uncut: bool = False
     legs: str = "never"
     bends: str = "start"
     bend_shortlist: int = 6
