@@ -1,19 +1,18 @@
 """The automatic start of each sequence's shape-fit trial, replayed: the bend gate.
 
-For every SEQ, the global search runs as the trial's start runs it (the template body at
-the sequence's height, ``hc+ep``, on the frame the start takes: the first with a person, or
+For every SEQ, the global search runs as the trial's start runs it (the template body at the
+sequence's height, ``hc+ep``, on the frame the start takes: the first with a person, or
 where the person enters the view a later one with enough of them,
-``StartSettings.complete_fraction``)
-with the given settings, and one JSON line says which frame (``frame``), how much of the
-observation the best straight finalist leaves unexplained, the angle neck - pelvis - knees'
-midpoint (degrees) of the recogniser's most confident proposals on that frame
-(``hip_angle``; the knees' midpoint is side-free), whether the bent bodies were searched
-(``StartSettings.bend_gate``, ``bend_hip_angle``), which body won, the finalists' scores
-and, where the sequence has ground truth, the start's mean joint error (cm) and share of
-joints within 10 cm. ``--cue`` adds the same angle of the true joints
-(``hip_angle_true``) and repeats the proposals' as ``hip_angle_proposals`` (its name before
-the tracker used it). A sequence with nobody on any frame is not replayed: its line says
-``"failed"``.
+``StartSettings.complete_fraction``) with the given settings, and one JSON line says which
+frame (``frame``), how much of the observation the best straight finalist leaves
+unexplained, the angle neck - pelvis - knees' midpoint (degrees) of the recogniser's most
+confident proposals on that frame (``hip_angle``; the knees' midpoint is side-free), whether
+the bent bodies were searched (``StartSettings.bend_gate``, ``bend_hip_angle``), which body
+won, the finalists' scores and, where the sequence has ground truth, the start's mean joint
+error (cm) and share of joints within 10 cm. ``--cue`` adds the same angle of the true
+joints (``hip_angle_true``) and repeats the proposals' as ``hip_angle_proposals`` (its name
+before the tracker used it). A sequence with nobody on any frame is not replayed: its line
+says ``"failed"``.
 
     .venv/bin/python tools/start_gate.py SEQ [SEQ ...] [--settings JSON] [--cue]
 
@@ -46,15 +45,16 @@ def start_frame(tracker, seq):
     """``(k, foreground)``: the frame the tracker's automatic start takes and its
     segmentation -- the first frame with a person, or where the person enters the view the
     first frame after it with enough of them (:attr:`StartSettings.complete_fraction`,
-    ``complete_uncut``);
-    ``(None, None)`` where no frame has a person."""
+    ``complete_uncut``, :func:`~depthtrack.track.loop.first_complete`, as the loop takes
+    them); ``(None, None)`` where no frame has a person."""
     g = tracker.settings.start
-    first = next((i for i in range(len(seq))
-                  if tracker.person_present(tracker.segmenter(seq.depth(i), seq.camera))), None)
+    segmented = (tracker.segmenter(seq.depth(i), seq.camera) for i in range(len(seq)))
+    first, fg = next(((i, f) for i, f in enumerate(segmented) if tracker.person_present(f)),
+                     (None, None))
     if first is None:
         return None, None
     end = min(len(seq), first + 1 + (g.complete_frames if g.complete_fraction > 0 else 0))
-    foregrounds = [tracker.segmenter(seq.depth(i), seq.camera) for i in range(first, end)]
+    foregrounds = [fg] + [tracker.segmenter(seq.depth(i), seq.camera) for i in range(first + 1, end)]
     k = first_complete([visible_area(f, seq.camera) for f in foregrounds], g.complete_fraction,
                        [cut_by_border(f.mask) for f in foregrounds] if g.complete_uncut else None)
     return first + k, foregrounds[k]
