@@ -70,15 +70,14 @@ def proposal_hip_angle(proposals):
     where one of them has no proposal. The recogniser's trunk is reliable and a knee's side
     does not matter here, so this tells a body folded at the hips from a straight one without
     fitting a pose (the start's bend gate, :attr:`~.start_settings.StartSettings.bend_hip_angle`)."""
-    pos = np.asarray(proposals.positions, dtype=np.float64)
+    pos, usable = confident(proposals, np.finfo(np.float64).tiny)     # any confidence above 0
     conf = np.asarray(proposals.confidence, dtype=np.float64)
     tops = []
     for name in ("neck", "pelvis", "l_knee", "r_knee"):
         j = JOINT_INDEX[name]
-        usable = np.isfinite(pos[j]).all(axis=1) & (conf[j] > 0)
-        if not usable.any():
+        if not usable[j].any():
             return None
-        tops.append(pos[j, int(np.argmax(np.where(usable, conf[j], -1.0)))])
+        tops.append(pos[j, int(np.argmax(np.where(usable[j], conf[j], -1.0)))])
     return float(hip_angle(*tops))
 
 
