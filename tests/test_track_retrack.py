@@ -55,7 +55,7 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
 
 
 def test_a_backward_track_gives_the_frames_up_to_where_it_stopped_doing_as_well():
-    from depthtrack.track.loop import best_prefix
+    from depthtrack.track.retrack import best_prefix
     held = [[1.0, 1.0]] * 6
     assert best_prefix(held, 0.05) == 6                  # alike throughout: every frame
     assert best_prefix(held, 0.0) == 1                   # no margin: exact ties, the first
@@ -73,7 +73,7 @@ def test_a_backward_track_gives_the_frames_up_to_where_it_stopped_doing_as_well(
 
 
 def test_a_backward_track_is_given_up_once_it_scores_worse_frame_after_frame():
-    from depthtrack.track.loop import gave_up
+    from depthtrack.track.retrack import gave_up
     held, lost = [[1.0, 1.0]] * 3, [[2.0, 1.0]]
     # summed excess over 1.05 x forward: -0.05, -0.1, -0.15, then +0.95 a frame
     assert not gave_up(held + lost * 4, 0.05, 5)         # four frames past its best
@@ -88,7 +88,7 @@ def test_a_backward_track_is_given_up_once_it_scores_worse_frame_after_frame():
 
 
 def test_a_correction_is_told_by_its_kind_and_the_forward_track_by_what_it_has():
-    from depthtrack.track.loop import _forward_agrees, new_correction
+    from depthtrack.track.retrack import _forward_agrees, new_correction
     before = TrackingState(recoveries=({"frame": 1, "frames_to_recover": 0},))
     limbs = before.replace(limb_swaps=({"frame": 3, "limbs": "legs"},))
     assert new_correction(before, limbs, ("heading", "limbs")) == "limbs"
@@ -117,7 +117,7 @@ def test_a_correction_is_told_by_its_kind_and_the_forward_track_by_what_it_has()
 
 
 def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
-    from depthtrack.track.loop import CORRECTION_ORDER, reach_after
+    from depthtrack.track.retrack import CORRECTION_ORDER, reach_after
     start = dict.fromkeys(CORRECTION_ORDER, 3)                     # tracking started on 3
     # "any": every later re-track stops past the correction, whatever its kind
     assert reach_after(start, "limbs", 10, "any") == dict.fromkeys(CORRECTION_ORDER, 11)
@@ -132,3 +132,52 @@ def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
     assert reach_after(after_turn, "limbs", 40, "rank")["heading"] == 31
     with pytest.raises(ValueError, match="retro_stop"):
         TrackerSettings(heading={"retro_stop": "never"})
+
+
+def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
+    """With retro_revoke, a heading switch to the wrong heading -- the swapped twin, climbed,
+    injected on frame 8 of a track that faces the right way, the judge's recovery off so that
+    only the re-track can answer it -- is re-tracked, the backward track scores worse from its
+    first frame, and the switch is taken back: no frame back to front. Without it frame 8
+    stays back to front (the recheck turns the track again four frames later)."""
+    import depthtrack.track.rechecks as rechecks
+    from depthtrack.body.facing import back_to_front
+
+    body = BodyModel.default(height=1.75)
+    x0 = fit_pose_to_joints(body, squat.joints[0])
+    wrong_on = 8
+    real = rechecks.recheck_heading
+
+    def switching_on_one_frame(state, pose, refit, twins, pixels, settings, judge=None):
+        if state.frame != wrong_on or not settings.heading.every:
+            return real(state, pose, refit, twins, pixels, settings, judge)
+        twin, _ = refit(np.asarray(twins(pose)).reshape(-1, len(pose))[0])
+        switch = {"frame": state.frame, "energy_kept": 0.0, "energy_turned": 0.0,
+                  "by": "injected", "evidence": 0.0}
+        return twin, {"heading_votes": 0, "heading_evidence": 0.0,
+                      "heading_switches": state.heading_switches + (switch,)}, True
+    monkeypatch.setattr(rechecks, "recheck_heading", switching_on_one_frame)
+    base = TrackerSettings().updated({"search": {"untwist": []},
+                                      "heading": {"retro_frames": 10, "every": 4},
+                                      "judge": {"lost_ratio": 100.0},
+                                      "propose": {"lost_frames": 1000}})
+    runs = {}
+    for revoke in (False, True):
+        settings = base.updated({"heading": {"retro_revoke": revoke}})
+        with Tracker(body, squat.camera, settings=settings) as tracker:
+            poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(len(squat))),
+                                                  init_pose=x0)]
+            runs[revoke] = (tracker.describe(), body.joint_positions(np.array(poses)))
+    info, joints = runs[False]
+    assert info["heading_switches"][0]["index"] == wrong_on
+    assert back_to_front(joints, squat.joints)[wrong_on] == 1.0      # the injected switch
+    first = info["retracks"][0]
+    assert first["index"] == wrong_on and not first["taken"] and "revoked" not in first
+    info, joints = runs[True]
+    entry = info["retracks"][0]
+    assert entry["revoked"] and entry["index"] == wrong_on and entry["switch"]["by"] == "injected"
+    assert entry["frames"] > 0 and entry["frames_taken"] == 0
+    assert entry["energy_backward"] > entry["energy_forward"]
+    assert all(s["index"] != wrong_on for s in info["heading_switches"])
+    assert not np.any(back_to_front(joints, squat.joints) == 1.0)
+    assert point_errors(joints, squat.joints).mean(axis=-1).max() < 0.1

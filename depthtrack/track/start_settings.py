@@ -354,7 +354,7 @@ class HeadingSettings:
     correction back to where the backward track's energy less the forward's, summed from the
     correction, is lowest, when that sum is below zero -- the frames next to the correction
     where the backward track explains the image better than the forward one, no margin
-    (:func:`.loop.best_prefix`): a backward track that holds the person for twenty frames
+    (:func:`.retrack.best_prefix`): a backward track that holds the person for twenty frames
     and then loses them in a turn gives those twenty. One that follows a wrong correction
     scores worse from its first frame and gives none. Default since 2026-11-27 (dev: cartwheel seed
     1 30 -> 55 %, no other sequence changed by more than 0.3 points; README, "The frames
@@ -364,7 +364,7 @@ class HeadingSettings:
     ``retro_give_up``: a backward track whose energy, less the forward's times ``1 +
     retro_margin`` and summed from the correction, is above zero and has not reached a new
     minimum for that many frames is stopped there and refused (0 = never;
-    :func:`.loop.gave_up`, ``stopped: "worse"`` in ``retracks``; ``retro_take`` may still
+    :func:`.retrack.gave_up`, ``stopped: "worse"`` in ``retracks``; ``retro_take`` may still
     take the frames next to the correction): it has lost the person or follows a wrong
     correction, and the rest of its window is work for nothing. Default 5 since 2026-11-27
     (dev: no sequence changed, 22 % fewer frames re-tracked).
@@ -372,7 +372,7 @@ class HeadingSettings:
     ``retro_stop``: which earlier corrections a backward track stops at (it always stops at
     the start). ``"any"``: the frame after any earlier correction whose frames were
     re-tracked. ``"rank"``: only one of its own kind or of a kind before it in
-    :data:`.loop.CORRECTION_ORDER` (heading, recovery, limbs): a heading switch's backward
+    :data:`.retrack.CORRECTION_ORDER` (heading, recovery, limbs): a heading switch's backward
     track goes on past a limb swap or a recovery (those corrected the limbs or found the
     person again, with the heading the forward track had, which the switch now says was
     wrong), a recovery's past a limb swap; a limb swap's stops at any. Where it goes on, the
@@ -382,6 +382,12 @@ class HeadingSettings:
     on the test split, where the failure was found (an informed figure), the 8 sequences it
     changes gained 8.9 points on average (README, "A heading switch's re-track past an
     earlier limb swap or recovery").
+
+    ``retro_revoke``: a heading switch whose re-track re-tracked frames and took none of
+    them (its backward track scored worse from the frame next to the switch on) is taken
+    back: the switch's frame is tracked again without the heading recheck, its votes and
+    evidence cleared (:func:`.retrack.revoke_switch`; the re-track entry gets ``revoked``).
+    A right switch is continuous with the frames before it; a lead that was noise is not.
     """
 
     frames: int = 10
@@ -416,6 +422,7 @@ class HeadingSettings:
     retro_take: str = "prefix"
     retro_give_up: int = 5
     retro_stop: str = "any"
+    retro_revoke: bool = False
 
     def __post_init__(self):
         _one_of(self, "start_by", START_SCORES)
@@ -429,6 +436,8 @@ class HeadingSettings:
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
                                                    f"or false, not {self.judge_start!r}")
+        _check(isinstance(self.retro_revoke, bool), f"HeadingSettings.retro_revoke must be true "
+                                                    f"or false, not {self.retro_revoke!r}")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
         object.__setattr__(self, "retro_after", tuple(self.retro_after))
         _check(set(self.retro_after) <= set(RETRO_KINDS),

@@ -1,0 +1,229 @@
+"""Stage "re-track": after a correction -- a heading switch, a limb swap, a recovery -- the
+frames before it tracked again backwards in time from the corrected pose, and the energy
+rule that decides how many of the backward poses replace the forward ones
+(:attr:`HeadingSettings.retro_frames`, ``retro_after``, ``retro_take``, ``retro_give_up``,
+``retro_stop``). With ``retro_revoke`` a heading switch whose backward track gives no frame
+is taken back (:func:`revoke_switch`). The frame loop (:mod:`.loop`) calls these.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..body.facing import back_to_front, sides_exchanged
+from .heading import LIMB_SWAPS
+
+
+#: Which corrections :func:`new_correction` reports, first the one a frame's re-track
+#: follows when it has several: a recovery replaces the whole pose.
+CORRECTION_ORDER = ("heading", "recovery", "limbs")
+
+#: What the backward track after each kind of correction runs without: the recheck that
+#: made the correction (it must keep the correction's choice; after a limb swap or a
+#: recovery the heading recheck too: the forward track's own checks found nothing there).
+_HEADING_OFF = {"every": 0, "search_every": 0}
+RETRO_OFF = {"heading": _HEADING_OFF,
+             "limbs": {**_HEADING_OFF, "limb_every": 0},
+             "recovery": {**_HEADING_OFF, "limb_every": 0}}
+
+#: Mean joint distance (m) under which a backward track after a recovery agrees with the
+#: forward one: from there back the forward track was found already.
+RETRO_AGREE_M = 0.05
+
+#: ``stopped`` of a re-track entry where the forward track had the correction already.
+STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "agrees"}
+
+
+def reach_after(lowest: dict, kind: str, at: int, stop: str) -> dict:
+    """``{kind: first frame}`` a later re-track of each kind (:data:`CORRECTION_ORDER`) may
+    reach once the frames before a correction of ``kind`` on frame ``at`` were re-tracked:
+    past ``at`` for every kind (``stop`` ``"any"``) or for ``kind`` and the kinds after it in
+    the order (``"rank"``; :attr:`HeadingSettings.retro_stop`), the others as they were."""
+    rank = CORRECTION_ORDER.index(kind)
+    return {k: at + 1 if stop == "any" or CORRECTION_ORDER.index(k) >= rank else first
+            for k, first in lowest.items()}
+
+
+def _corrections(state) -> dict:
+    """How many corrections of each kind :data:`CORRECTION_ORDER` ``state`` has had: a
+    recovery counts where a loss closed with the track found again."""
+    return {"heading": len(state.heading_switches), "limbs": len(state.limb_swaps),
+            "recovery": sum(r.get("frames_to_recover") is not None for r in state.recoveries)}
+
+
+def new_correction(before, after, kinds):
+    """The kind of correction (of ``kinds``, :attr:`HeadingSettings.retro_after`) that
+    ``after`` has and ``before`` had not -- the first in :data:`CORRECTION_ORDER` -- or None."""
+    was, now = _corrections(before), _corrections(after)
+    return next((k for k in CORRECTION_ORDER if k in kinds and now[k] > was[k]), None)
+
+
+def _forward_agrees(kind, detail, backward, forward) -> bool:
+    """Whether the forward track's joints ``forward (15, 3)`` already have what the
+    correction of ``kind`` gave the backward track's ``backward (15, 3)``: the heading
+    (trunks less than a quarter turn apart), the limb pair ``detail``'s sides, or (after a
+    recovery) the pose, within :data:`RETRO_AGREE_M` on average."""
+    b, f = backward[None], forward[None]
+    if kind == "heading":
+        return not back_to_front(f, b)[0]
+    if kind == "limbs":
+        return not sides_exchanged(f, b, LIMB_SWAPS[detail])[0]
+    return float(np.mean(np.linalg.norm(f - b, axis=-1))) < RETRO_AGREE_M
+
+
+def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
+                              kind: str = "heading") -> None:
+    """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``at``: the
+    frames before it tracked again backwards from the corrected pose
+    (:attr:`HeadingSettings.retro_frames`, ``retro_after``).
+
+    The backward track runs with the recheck that made the correction off (it must keep the
+    correction's choice, :data:`RETRO_OFF`) through ``recent`` ``[(index, depth), ...]``
+    from the newest down, and stops at ``lowest`` (the start, or the frame after an earlier
+    re-tracked correction, :func:`reach_after`), at a pose already yielded or dropped, at a
+    lost track, or where the forward track already has what the correction gave
+    (:func:`_forward_agrees`: after a heading switch, faces the way the backward track does,
+    their trunks' left-to-right axes less than a quarter turn apart,
+    :func:`~depthtrack.body.facing.back_to_front`; after a limb swap, has the swapped limbs
+    on the backward track's sides, :func:`~depthtrack.body.facing.sides_exchanged`; after a
+    recovery, agrees with it): from there back the forward track had it already, and its
+    poses stay.
+    Its poses replace those in ``held`` unless their energy without the motion prior on the
+    recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
+    exceeds the forward poses' on the same frames by more than the fraction
+    ``retro_margin``. The correction is the evidence: frames before it where one heading
+    (or one side for the limbs) explained the image clearly better would have been corrected
+    sooner, so there the two score alike, and the backward track's continuity with the
+    corrected pose is what tells them apart; the margin only refuses a backward track that
+    lost the person. Either way ``tracker.state.retracks`` gets an entry.
+    The tracker's state is the corrected forward state again afterwards: the forward track
+    goes on as it would have.
+    """
+    settings = tracker.settings
+    h = settings.heading
+    corrected = tracker.state
+    detail = corrected.limb_swaps[-1]["limbs"] if kind == "limbs" else None
+    where = {index: k for k, (index, _) in enumerate(held)}
+    shares = {e["index"]: e.get("cost") for e in corrected.log[-(len(recent) + 2):] if "index" in e}
+    state, poses, indices, backward, judged = corrected, [], [], [], []
+    stopped = None
+    tracker.settings = settings.updated({"heading": RETRO_OFF[kind]})
+    try:
+        for index, depth in reversed(recent):
+            k = where.get(index)
+            stopped = ("start or switch" if index < lowest else "yielded" if k is None else
+                       "no person" if held[k][1] is None else
+                       "unscored" if shares.get(index) is None else None)
+            if stopped:
+                break
+            state, x = tracker.advance(state, depth)
+            if x is None:
+                stopped = "lost"
+                break
+            forward = held[k][1]
+            joints = np.asarray(tracker.body.joint_positions(np.stack([x, forward])))
+            if _forward_agrees(kind, detail, joints[0], joints[1]):
+                stopped = STOP_LABELS[kind]
+                break
+            poses.append(x)
+            indices.append(index)
+            backward.append(state.log[-1]["cost"])
+            judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
+            if gave_up(judged, h.retro_margin, h.retro_give_up):
+                stopped = "worse"
+                break
+    finally:
+        tracker.settings = settings
+    entry = {"kind": kind, "index": at, "frames": len(indices),
+             "stopped": stopped or "window", "taken": False}
+    if indices:
+        e_back, e_forward = np.mean(judged, axis=0)
+        # (a track given up on scores above the margin over the frames it reached)
+        n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
+             best_prefix(judged, 0.0) if h.retro_take == "prefix" else 0)
+        entry.update(first=indices[-1], last=indices[0], taken=n > 0,
+                     energy_forward=round(float(e_forward), 1),
+                     energy_backward=round(float(e_back), 1),
+                     share_forward=round(float(np.mean([shares[j] for j in indices])), 4),
+                     share_backward=round(float(np.mean(backward)), 4),
+                     frames_taken=n, **({"first_taken": indices[n - 1]} if n else {}))
+        for index, x in zip(indices[:n], poses[:n]):
+            held[where[index]] = (index, x)
+    tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
+
+
+def summed_excess(judged, margin: float) -> np.ndarray:
+    """``(n,)``: the backward track's energy less the forward's times ``1 + margin``, summed
+    from the correction back over ``judged (n, 2)`` (per frame, nearest the correction
+    first, backward then forward) -- what :func:`best_prefix` and :func:`gave_up` read."""
+    e = np.asarray(judged, dtype=np.float64).reshape(-1, 2)
+    return np.cumsum(e[:, 0] - (1.0 + margin) * e[:, 1])
+
+
+def best_prefix(judged, margin: float) -> int:
+    """How many frames of a refused backward track to take after all, from the correction
+    back (:attr:`HeadingSettings.retro_take` ``"prefix"``, called with ``margin`` 0).
+
+    ``judged (n, 2)``: per frame, nearest the correction first, the backward and the forward
+    pose's energy. The answer is the ``k`` that minimises ``sum_{j<k} (backward_j - (1 +
+    margin) forward_j)``, 0 when no such sum is below zero (the first of equal minima):
+    the frames up to where the backward track stopped doing better than the forward one.
+    """
+    d = summed_excess(judged, margin)
+    if len(d) == 0:
+        return 0
+    k = int(np.argmin(d))
+    return k + 1 if d[k] <= 0 else 0
+
+
+def gave_up(judged, margin: float, frames: int) -> bool:
+    """Whether a backward track is refused before its window ends
+    (:attr:`HeadingSettings.retro_give_up`): its energy less the forward's times ``1 +
+    margin``, summed from the correction over ``judged (n, 2)`` (per frame, nearest the
+    correction first, backward then forward), is above zero and has not reached a new
+    minimum for ``frames`` frames (0 = never). The refusal is not certain -- later frames
+    could bring the sum back below zero -- but a backward track that scores worse frame
+    after frame has lost the person or follows a wrong correction."""
+    if frames <= 0 or len(judged) <= frames:
+        return False
+    d = summed_excess(judged, margin)
+    return bool(d[-1] > 0 and len(d) - 1 - int(np.argmin(d)) >= frames)
+
+
+def refused_whole(entry: dict) -> bool:
+    """Whether a re-track entry (of :func:`retrack_before_correction`) re-tracked frames and
+    gave none of them: its backward track scored worse than the forward poses from the
+    frame next to the correction on (no prefix below zero) and over its whole reach."""
+    return entry.get("frames", 0) > 0 and not entry.get("taken")
+
+
+def revoke_switch(tracker, held, before, depth, index: int) -> bool:
+    """Take back the heading switch on frame ``index`` whose re-track gave no frame
+    (:attr:`HeadingSettings.retro_revoke`): frame ``index`` tracked again from ``before``
+    (the state before it) with the heading recheck off, the recheck's votes and evidence
+    cleared, so the twin must win again from nothing to switch again.
+
+    A right switch is continuous with the frames before it: tracked back from the turned
+    pose, they score about as well as the forward poses (before a switch the two headings
+    explain a frame alike, or the recheck would have turned sooner), and the frames next to
+    it at least better (:func:`best_prefix`). A switch whose backward track scores worse
+    from the first frame back is the evidence that the twin's lead on the switch's frame was
+    noise. ``held[-1]`` (frame ``index``'s pose) is replaced; the tracker's state becomes the
+    unswitched one with the re-track entry, ``revoked: true``, appended to its
+    ``retracks``. Returns False, leaving everything as it was, when the unswitched track is
+    dropped on that frame.
+    """
+    settings = tracker.settings
+    entry = {**tracker.state.retracks[-1], "revoked": True,
+             "switch": {k: v for k, v in tracker.state.heading_switches[-1].items()
+                        if k != "frame"}}
+    tracker.settings = settings.updated({"heading": RETRO_OFF["heading"]})
+    try:
+        state, x = tracker.advance(before, depth)
+    finally:
+        tracker.settings = settings
+    if x is None:
+        return False
+    held[-1] = (index, x)
+    tracker.state = state.replace(heading_votes=0, heading_evidence=0.0,
+                                  retracks=state.retracks + (entry,))
+    return True
