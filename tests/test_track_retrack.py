@@ -87,6 +87,16 @@ def test_a_backward_track_is_given_up_once_it_scores_worse_frame_after_frame():
     assert gave_up(back + lost * 5, 0.05, 5)
 
 
+def test_a_switch_is_taken_back_by_the_rule_asked_for():
+    """retro_revoke's rules over (frames taken, frames next to the switch done better)."""
+    from depthtrack.track.retrack import revokes
+
+    cases = [(0, 0), (5, 0), (3, 3), (0, 2)]   # refused; taken whole but worse next to it; ...
+    assert [revokes("never", *c) for c in cases] == [False] * 4
+    assert [revokes("refused", *c) for c in cases] == [True, False, False, True]
+    assert [revokes("unsupported", *c) for c in cases] == [True, True, False, False]
+
+
 def test_a_correction_is_told_by_its_kind_and_the_forward_track_by_what_it_has():
     from depthtrack.track.retrack import _forward_agrees, new_correction
     before = TrackingState(recoveries=({"frame": 1, "frames_to_recover": 0},))
@@ -135,7 +145,7 @@ def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
 
 
 def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
-    """With retro_revoke, a heading switch to the wrong heading -- the swapped twin, climbed,
+    """With retro_revoke "refused", a heading switch to the wrong heading -- the swapped twin, climbed,
     injected on frame 8 of a track that faces the right way, the judge's recovery off so that
     only the re-track can answer it -- is re-tracked, the backward track scores worse from its
     first frame, and the switch is taken back: no frame back to front. Without it frame 8
@@ -162,21 +172,21 @@ def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkey
                                       "judge": {"lost_ratio": 100.0},
                                       "propose": {"lost_frames": 1000}})
     runs = {}
-    for revoke in (False, True):
+    for revoke in ("never", "refused"):
         settings = base.updated({"heading": {"retro_revoke": revoke}})
         with Tracker(body, squat.camera, settings=settings) as tracker:
             poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(len(squat))),
                                                   init_pose=x0)]
             runs[revoke] = (tracker.describe(), body.joint_positions(np.array(poses)))
-    info, joints = runs[False]
+    info, joints = runs["never"]
     assert info["heading_switches"][0]["index"] == wrong_on
     assert back_to_front(joints, squat.joints)[wrong_on] == 1.0      # the injected switch
     first = info["retracks"][0]
     assert first["index"] == wrong_on and not first["taken"] and "revoked" not in first
-    info, joints = runs[True]
+    info, joints = runs["refused"]
     entry = info["retracks"][0]
     assert entry["revoked"] and entry["index"] == wrong_on and entry["switch"]["by"] == "injected"
-    assert entry["frames"] > 0 and entry["frames_taken"] == 0
+    assert entry["frames"] > 0 and entry["frames_taken"] == 0 and entry["frames_better"] == 0
     assert entry["energy_backward"] > entry["energy_forward"]
     assert all(s["index"] != wrong_on for s in info["heading_switches"])
     assert not np.any(back_to_front(joints, squat.joints) == 1.0)

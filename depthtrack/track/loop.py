@@ -16,8 +16,8 @@ import numpy as np
 from .heading import settle_heading
 from .observation import cut_by_border
 from .observe import as_depth, person_present, visible_area
-from .retrack import (CORRECTION_ORDER, new_correction, reach_after, refused_whole,
-                      retrack_before_correction, revoke_switch)
+from .retrack import (CORRECTION_ORDER, new_correction, reach_after, retrack_before_correction,
+                      revoke_switch)
 from .settings import TrackerSettings
 from .state import TrackedFrame
 from .tracker import Tracker
@@ -71,9 +71,7 @@ def stream_poses(tracker, frames, init_pose=None):
             _advance_into(tracker, held, i, depth)
             kind = new_correction(before, tracker.state, s.heading.retro_after) if retro else None
             if kind is not None and tracker.state.pose is not None:
-                retrack_before_correction(tracker, held, recent, lowest[kind], i, kind)
-                revoked = (kind == "heading" and s.heading.retro_revoke
-                           and refused_whole(tracker.state.retracks[-1])
+                revoked = (retrack_before_correction(tracker, held, recent, lowest[kind], i, kind)
                            and revoke_switch(tracker, held, before, depth, i))
                 if not revoked:
                     lowest = reach_after(lowest, kind, i, s.heading.retro_stop)

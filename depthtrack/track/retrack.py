@@ -2,8 +2,8 @@
 frames before it tracked again backwards in time from the corrected pose, and the energy
 rule that decides how many of the backward poses replace the forward ones
 (:attr:`HeadingSettings.retro_frames`, ``retro_after``, ``retro_take``, ``retro_give_up``,
-``retro_stop``). With ``retro_revoke`` a heading switch whose backward track gives no frame
-is taken back (:func:`revoke_switch`). The frame loop (:mod:`.loop`) calls these.
+``retro_stop``). With ``retro_revoke`` a heading switch whose backward track does not bear
+it out is taken back (:func:`revokes`, :func:`revoke_switch`). The frame loop (:mod:`.loop`) calls these.
 """
 from __future__ import annotations
 
@@ -71,7 +71,7 @@ def _forward_agrees(kind, detail, backward, forward) -> bool:
 
 
 def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
-                              kind: str = "heading") -> None:
+                              kind: str = "heading") -> bool:
     """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``at``: the
     frames before it tracked again backwards from the corrected pose
     (:attr:`HeadingSettings.retro_frames`, ``retro_after``).
@@ -96,7 +96,12 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     corrected pose is what tells them apart; the margin only refuses a backward track that
     lost the person. Either way ``tracker.state.retracks`` gets an entry.
     The tracker's state is the corrected forward state again afterwards: the forward track
-    goes on as it would have.
+    goes on as it would have. The entry's ``frames_better`` counts the frames next to the
+    correction where the backward track did better (:func:`best_prefix` without a margin).
+
+    Returns whether the correction, a heading switch, is to be taken back
+    (:attr:`HeadingSettings.retro_revoke`, :func:`revokes`; then no frame is taken, and
+    the caller runs :func:`revoke_switch`).
     """
     settings = tracker.settings
     h = settings.heading
@@ -135,12 +140,16 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         tracker.settings = settings
     entry = {"kind": kind, "index": at, "frames": len(indices),
              "stopped": stopped or "window", "taken": False}
+    revoke = False
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)
+        better = best_prefix(judged, 0.0)
         # (a track given up on scores above the margin over the frames it reached)
         n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
-             best_prefix(judged, 0.0) if h.retro_take == "prefix" else 0)
-        entry.update(first=indices[-1], last=indices[0], taken=n > 0,
+             better if h.retro_take == "prefix" else 0)
+        revoke = kind == "heading" and revokes(h.retro_revoke, n, better)
+        n = 0 if revoke else n
+        entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
                      energy_backward=round(float(e_back), 1),
                      share_forward=round(float(np.mean([shares[j] for j in indices])), 4),
@@ -149,6 +158,16 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         for index, x in zip(indices[:n], poses[:n]):
             held[where[index]] = (index, x)
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
+    return revoke
+
+
+def revokes(rule: str, taken: int, better: int) -> bool:
+    """Whether a heading switch is taken back by ``rule`` (:data:`~.start_settings.
+    RETRO_REVOKES`, :attr:`HeadingSettings.retro_revoke`) when its re-track took ``taken``
+    frames and did better on the ``better`` frames next to it: ``"refused"``, none taken;
+    ``"unsupported"``, none better (even where the whole backward track was within the
+    margin and so taken); ``"never"``, never."""
+    return rule == "refused" and taken == 0 or rule == "unsupported" and better == 0
 
 
 def summed_excess(judged, margin: float) -> np.ndarray:
@@ -189,15 +208,8 @@ def gave_up(judged, margin: float, frames: int) -> bool:
     return bool(d[-1] > 0 and len(d) - 1 - int(np.argmin(d)) >= frames)
 
 
-def refused_whole(entry: dict) -> bool:
-    """Whether a re-track entry (of :func:`retrack_before_correction`) re-tracked frames and
-    gave none of them: its backward track scored worse than the forward poses from the
-    frame next to the correction on (no prefix below zero) and over its whole reach."""
-    return entry.get("frames", 0) > 0 and not entry.get("taken")
-
-
 def revoke_switch(tracker, held, before, depth, index: int) -> bool:
-    """Take back the heading switch on frame ``index`` whose re-track gave no frame
+    """Take back the heading switch on frame ``index`` whose re-track :func:`revokes` it
     (:attr:`HeadingSettings.retro_revoke`): frame ``index`` tracked again from ``before``
     (the state before it) with the heading recheck off, the recheck's votes and evidence
     cleared, so the twin must win again from nothing to switch again.
@@ -205,9 +217,8 @@ def revoke_switch(tracker, held, before, depth, index: int) -> bool:
     A right switch is continuous with the frames before it: tracked back from the turned
     pose, they score about as well as the forward poses (before a switch the two headings
     explain a frame alike, or the recheck would have turned sooner), and the frames next to
-    it at least better (:func:`best_prefix`). A switch whose backward track scores worse
-    from the first frame back is the evidence that the twin's lead on the switch's frame was
-    noise. ``held[-1]`` (frame ``index``'s pose) is replaced; the tracker's state becomes the
+    it better (:func:`best_prefix`). A switch whose backward track scores worse from the
+    first frame back says the twin's lead on the switch's frame was noise. ``held[-1]`` (frame ``index``'s pose) is replaced; the tracker's state becomes the
     unswitched one with the re-track entry, ``revoked: true``, appended to its
     ``retracks``. Returns False, leaving everything as it was, when the unswitched track is
     dropped on that frame.

@@ -206,6 +206,8 @@ RETRO_KINDS = ("heading", "limbs", "recovery")
 RETRO_TAKES = ("all", "prefix")
 #: Which earlier corrections a re-track stops at (:attr:`HeadingSettings.retro_stop`).
 RETRO_STOPS = ("any", "rank")
+#: Which heading switches their re-track takes back (:attr:`HeadingSettings.retro_revoke`).
+RETRO_REVOKES = ("never", "refused", "unsupported")
 #: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
 START_SCORES = ("energy", "unexplained")
 
@@ -383,11 +385,13 @@ class HeadingSettings:
     changes gained 8.9 points on average (README, "A heading switch's re-track past an
     earlier limb swap or recovery").
 
-    ``retro_revoke``: a heading switch whose re-track re-tracked frames and took none of
-    them (its backward track scored worse from the frame next to the switch on) is taken
-    back: the switch's frame is tracked again without the heading recheck, its votes and
-    evidence cleared (:func:`.retrack.revoke_switch`; the re-track entry gets ``revoked``).
-    A right switch is continuous with the frames before it; a lead that was noise is not.
+    ``retro_revoke``: which heading switches their re-track takes back (:data:`RETRO_REVOKES`,
+    :func:`.retrack.revokes`): ``"refused"``, one whose re-track re-tracked frames and took
+    none; ``"unsupported"``, one whose backward track did better on no frame next to it,
+    even where the whole was within the margin; ``"never"`` (default). The switch's frame is
+    tracked again without the heading recheck, its votes and evidence cleared
+    (:func:`.retrack.revoke_switch`; the entry gets ``revoked`` and the ``switch``). A right
+    switch is continuous with the frames before it; a lead that was noise is not.
     """
 
     frames: int = 10
@@ -422,7 +426,7 @@ class HeadingSettings:
     retro_take: str = "prefix"
     retro_give_up: int = 5
     retro_stop: str = "any"
-    retro_revoke: bool = False
+    retro_revoke: str = "never"
 
     def __post_init__(self):
         _one_of(self, "start_by", START_SCORES)
@@ -436,8 +440,6 @@ class HeadingSettings:
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
                                                    f"or false, not {self.judge_start!r}")
-        _check(isinstance(self.retro_revoke, bool), f"HeadingSettings.retro_revoke must be true "
-                                                    f"or false, not {self.retro_revoke!r}")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
         object.__setattr__(self, "retro_after", tuple(self.retro_after))
         _check(set(self.retro_after) <= set(RETRO_KINDS),
@@ -445,6 +447,7 @@ class HeadingSettings:
                f"not {self.retro_after!r}")
         _one_of(self, "retro_stop", RETRO_STOPS)
         _one_of(self, "retro_take", RETRO_TAKES)
+        _one_of(self, "retro_revoke", RETRO_REVOKES)
         _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
                f"HeadingSettings.twin_starts must be a non-empty choice of "
                f"{', '.join(TWIN_STARTS)}, not {self.twin_starts!r}")
