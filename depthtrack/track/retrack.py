@@ -162,7 +162,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
 
 
 def revokes(rule: str, taken: int, better: int) -> bool:
-    """Whether a heading switch is taken back by ``rule`` (:data:`~.start_settings.
+    """Whether a heading switch is taken back by ``rule`` (:data:`~.heading_settings.
     RETRO_REVOKES`, :attr:`HeadingSettings.retro_revoke`) when its re-track took ``taken``
     frames and did better on the ``better`` frames next to it: ``"refused"``, none taken;
     ``"unsupported"``, none better (even where the whole backward track was within the

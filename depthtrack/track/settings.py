@@ -9,8 +9,9 @@ starts: ``start`` (the global search of the first frame and of a recovery), ``he
 Every number of the search schedule lives here; ``TrackerSettings.to_dict()`` is written
 whole into ``summary.json``. One set serves every sequence; never tune it per clip.
 
-The groups of a frame are defined here, those of a start in :mod:`.start_settings` (and
-re-exported here), the shared value checks in :mod:`.setting_checks`.
+The groups of a frame are defined here, those of a start in :mod:`.start_settings` and
+:mod:`.heading_settings` (both re-exported here), the shared value checks in
+:mod:`.setting_checks`.
 
 The flat names of the earlier single-level settings still construct and read
 (``TrackerSettings(heading_frames=0)``, ``settings.lost_ratio``): :data:`FLAT_NAMES` maps
@@ -27,10 +28,11 @@ from .setting_checks import check as _check
 from .setting_checks import one_of as _one_of
 from .setting_checks import positive as _positive
 from .setting_checks import power_of_two as _power_of_two
-# the groups of a start are defined in start_settings.py; import every group from here
-from .start_settings import (FACINGS, START_SCORES,  # noqa: F401
-                             START_TWINS, TWIN_STARTS, HeadingSettings, HeightSettings,
-                             ShapeSettings, StartSettings)
+# the groups of a start are defined in start_settings.py and heading_settings.py; import
+# every group from here
+from .heading_settings import (START_SCORES, START_TWINS, TWIN_STARTS,  # noqa: F401
+                               HeadingSettings)
+from .start_settings import FACINGS, HeightSettings, ShapeSettings, StartSettings  # noqa: F401
 
 
 @dataclass(frozen=True)

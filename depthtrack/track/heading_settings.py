@@ -1,0 +1,269 @@
+"""The settings of the front/back check after a start and of the rechecks and re-tracks
+while tracking (``heading``, :class:`HeadingSettings`); :class:`~.settings.TrackerSettings`
+nests it with the other groups (:mod:`.settings` re-exports every name here)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .setting_checks import check as _check
+from .setting_checks import one_of as _one_of
+from .setting_checks import positive as _positive
+from .setting_checks import power_of_two as _power_of_two
+
+#: The start check's other hypothesis: the pose turned half a turn about its long axis
+#: (limbs turned with it), or its swapped twin (the joints kept, the sides exchanged, as the
+#: recheck while tracking uses).
+START_TWINS = ("turned", "swapped", "search")
+#: How the swapped twins may be fitted (:func:`.heading.swapped_twins`; ``twin_starts``).
+TWIN_STARTS = ("turned", "rest")
+#: The corrections whose earlier frames :attr:`HeadingSettings.retro_after` may re-track.
+RETRO_KINDS = ("heading", "limbs", "recovery")
+#: How much of a backward track :attr:`HeadingSettings.retro_take` may take.
+RETRO_TAKES = ("all", "prefix")
+#: Which earlier corrections a re-track stops at (:attr:`HeadingSettings.retro_stop`).
+RETRO_STOPS = ("any", "rank")
+#: Which heading switches their re-track takes back (:attr:`HeadingSettings.retro_revoke`).
+RETRO_REVOKES = ("never", "refused", "unsupported")
+#: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
+START_SCORES = ("energy", "unexplained")
+
+
+@dataclass(frozen=True)
+class HeadingSettings:
+    """The front/back check after an automatic start (:mod:`.heading`).
+
+    The pose and its twin turned to face the other way are both tracked through ``frames``
+    frames (0 = off); the turned one replaces the first when its mean score over those frames
+    is lower by a fraction: with ``start_by="unexplained"`` (the default) the unexplained
+    share of the foreground, lower by ``margin``; with ``"energy"`` the energy without the
+    motion prior (likelihood plus pose prior) per foreground pixel at the tracked poses, lower
+    by ``energy_margin``. The share decides by default: on the 93 dev starts of the wide and
+    parity presets the energy (margin 0) kept the heading whose ten frames were clearly
+    worse (by 20 points of joints within 10 cm) 14 times, the share with its 10 % margin 11
+    times; the energy's wrong leads reached 36 %, seen from 270 degrees. ``summary.json``
+    keeps both scores under ``heading_check``.
+
+    Then, while tracking, every ``every`` frames (0 = never) the tracked pose and its twin
+    facing the other way are both climbed on the frame (``twin_passes`` passes with the
+    start's steps; :func:`.heading.recheck_heading`): the twin gets a vote when its energy
+    without the motion prior (likelihood plus pose prior) is lower by ``recheck_margin``
+    times the foreground's pixel count, and replaces the track after ``votes`` votes in a
+    row.
+
+    Small wins add up too: each recheck adds the twin's lead (energy difference per
+    foreground pixel) less ``evidence_drift`` to a running sum that never goes below zero
+    (Page's CUSUM test), and the twin takes over when the sum passes ``evidence_threshold``
+    (0 = off). A profile view gives the right heading a steady small lead, below
+    ``recheck_margin``; a frontal view, where the twins explain the image equally well,
+    gives leads of either sign that the drift cancels.
+
+    Where fewer than ``frames`` frames follow the start, the check runs on those there are
+    when they are at least ``min_frames`` (else it is skipped), so a longer look does not
+    leave short clips unchecked.
+
+    ``start_twin``: the start check's other hypothesis (:data:`START_TWINS`), by default the
+    swapped twin, as the recheck's: a twin turned with its limbs competes with a different
+    fit of the limbs, not only with the other heading, and on dev clips seen from the front
+    that made the check keep the wrong one. ``"search"``: the global search's best pose
+    facing the other way (:func:`.heading.flip_search`).
+
+    A twin keeps the tracked pose's limb errors: a wrong-facing track places the limbs where
+    its own knees and elbows can bend, and exchanging the sides does not put them where the
+    image has them, so the right heading's twin can lose to the wrong heading's fit. So every
+    ``search_every`` frames (0 = never) the global search looks for the best pose facing the
+    other way (:func:`.heading.flip_search`); it takes over when its energy without the
+    motion prior is lower than the tracked pose's, climbed alike, by ``search_margin`` times
+    the foreground's pixel count -- and, with ``search_both``, lower than the same search's
+    best pose facing the tracked way too (the tracked pose is fitted by a local climb only, so
+    a fresh global search would beat it by its effort alone, whichever way it faces).
+
+    The sides of the limbs too: every ``limb_every`` frames (0 = never) twins of the tracked
+    pose with the legs' or the arms' sides exchanged are climbed alike, and the lower one
+    replaces the track when its energy is lower by the fraction ``limb_margin``
+    (:func:`.heading.recheck_limb_sides`: a track with its legs crossed).
+
+    ``twin_starts``: where the swapped twin's fit starts (:data:`TWIN_STARTS`, one or both;
+    :func:`.heading.swapped_twins`); every twin is climbed and the lowest energy competes,
+    in the recheck and in the start check. Both by default: a twin fitted from the turned
+    pose inherits its contortions; from the rest pose it does not (dev 05_20, Kinect v2 from
+    120 degrees, seed 2: 20 % -> 88 % of joints within 10 cm, the start check now keeping
+    the twin; 105_05 seed 3 62 -> 72 %; five other dev sequences unchanged).
+
+    ``refit_level``: the rung of the start's step ladder (``SearchSettings.levels +
+    extra_levels`` rungs, the coarsest ``step_factor`` times the per-frame steps) on which
+    every recheck's climbs -- the tracked pose's, the twins', the reach candidates' -- begin
+    (0 = the coarsest). The tracked pose and the twins fitted to its joints start near a
+    minimum; the coarsest steps are for a search that starts far off, and the rechecks'
+    climbs were about two thirds of the candidates scored (README, "Speed").
+
+    ``twin_climbs``: how many of the front/back twin's fits (one per ``twin_starts``) the
+    recheck climbs, those of lowest unclimbed energy first (0 = all). The fits are one
+    hypothesis, the same joints reached from two starts; on eight dev sequences the one
+    lower before climbing was the lower after it in 94 of 132 rechecks, and where it was
+    not, the two leads differed by a median 0.005 of energy per pixel (once 0.12); one
+    climb fewer per recheck scored 10 % fewer candidates per frame on the dev wide preset
+    with the same accuracy (82.3 against 82.2 %), so 1 is the default (README, "Speed").
+
+    ``recheck_tile``: the tile side (pixels) every recheck's climbs and comparisons are
+    rendered at (0 = the search's, :attr:`ObserveSettings.tile`). The rechecks ask which of
+    a few whole-body hypotheses explains a frame better -- facing, the limbs' sides, a reach
+    -- and are most of the candidates a frame scores; a coarser tile costs about half as
+    much per candidate on llvmpipe (``depthtrack bench``). Every hypothesis of one recheck is
+    scored at the same tile, and the energy is a mean per pixel times the ROI's area, so the
+    margins keep their meaning. Not adopted: at 32 the dev wide preset (seeds 1-2, paired)
+    lost 3.3 points, 8 sequences by more than 5 against 1 gained (README, "Speed").
+
+    ``judge_tile``: the tile side (pixels) at which the front/back recheck compares the
+    tracked pose and its twin once both are climbed (0 = the climbs' own tile, no second
+    render). A body's front and back differ in centimetre-sized shapes (toes, face, chest
+    against buttocks) that a 64-pixel tile of a whole person blurs: on a dev track held back
+    to front (overhead, Azure NFOV from 240 degrees, seed 1) the twin, climbed, led by 0.2
+    to 3.4 % on 64-pixel tiles, under the recheck's margins, and by 1.9 to 5.1 % on 256-pixel
+    tiles; on a track facing the right way the twin trailed by more on the finer tiles too
+    (README, "Front or back at a finer tile"). Two renders per recheck. 256 by default:
+    on 19 dev sequences paired with 0, +6.1 ± 4.1 points, none lost, overhead seeds 2 and 3
+    20 -> 79 and 73 %, the ten control sequences identical (README).
+
+    ``judge_start``: with ``judge_tile``, a start check whose two tracks came out within the
+    margin of each other (``heading_check.ambiguous``) is decided by their mean energy per
+    pixel on ``judge_tile`` tiles, the lower kept (``heading_check.decided_by = "judge"``),
+    instead of keeping the initial heading. One render per checked frame and track. Not
+    adopted: on nine dev sequences it put overhead seed 1 right (23 -> 99 %) and 05_20 seed
+    1 wrong (77 -> 54 %, a 0.2 % lead) (README, "Front or back at a finer tile").
+
+    ``reseat_every``: every that many frames (0 = never) each limb of the tracked pose is set
+    to every pose of the limb library (k-means centres of the train motions' arm and leg
+    poses, one batch), the ``reseat_climbs`` lowest of each limb are climbed over that limb,
+    and the lowest replaces the track when its energy is lower than the tracked pose's,
+    climbed alike, by the fraction ``reseat_margin`` (:func:`.reseat.recheck_reseat`: a limb
+    held in the wrong basin, which the climb's small steps do not leave). Off by default:
+    judged by the truth on 19 dev tracks each decision helps the frame it acts on (margin
+    0.01: 9 of 38 frames taken better by more than 2 cm, 1 worse), but tracked, paired with
+    the default, one sequence lost more than 5 points at margin 0.01 and at 0.05 (90_05
+    seed 3, 05_20 seed 1), the rule set before (README, "Re-seating a limb").
+
+    ``retro_frames``: after a recheck turns the track (a heading switch), the frames before
+    the switch were tracked facing the wrong way too, since the evidence took frames to add
+    up: up to that many of them (default 50 since 2026-11-27; 0 = off) are tracked again backwards in time from the
+    turned pose, the heading recheck off on the way, until the forward track faces the way
+    the backward one does (their trunks less than a quarter turn apart) or the backward
+    track reaches the last start or switch; the backward poses replace the forward ones unless their energy
+    summed over those frames, judged as the recheck judges (on ``judge_tile`` tiles,
+    without the motion prior), exceeds the forward poses' by more than the fraction
+    ``retro_margin``: before the switch the two headings explain the frames about equally
+    (else the recheck would have turned sooner), and the backward track's continuity with
+    the turned pose is the evidence (``heading_retracks`` in ``summary.json``).
+    The loop then holds each pose back that many frames before it yields it
+    (:func:`.loop.stream_poses`).
+
+    ``retro_after``: which corrections have the frames before them re-tracked so:
+    ``"heading"`` (a heading switch, as above), ``"limbs"`` (a limb swap,
+    :func:`.heading.recheck_limb_sides`: the backward track runs with the heading and limb
+    rechecks off and stops where the forward track's swapped limbs already lie on the sides
+    the backward track's do) and ``"recovery"`` (a lost track found again,
+    :func:`.judge.judge_frame`: rechecks off, stops where the two tracks agree, mean joint
+    distance under 5 cm). Each re-track is judged by the same energy rule
+    (``retracks`` in ``summary.json``, with its ``kind``). All three by default since
+    2026-11-27 (dev, paired with ``("heading",)``: +1.5 points, none lost more than 5, 9 %
+    more candidates; README, "The frames before a limb swap or a recovery").
+
+    ``retro_take``: what of a backward track the rule above refuses may still replace the
+    forward poses. ``"all"``: nothing (all or nothing). ``"prefix"``: the frames from the
+    correction back to where the backward track's energy less the forward's, summed from the
+    correction, is lowest, when that sum is below zero -- the frames next to the correction
+    where the backward track explains the image better than the forward one, no margin
+    (:func:`.retrack.best_prefix`): a backward track that holds the person for twenty frames
+    and then loses them in a turn gives those twenty. One that follows a wrong correction
+    scores worse from its first frame and gives none. Default since 2026-11-27 (dev: cartwheel seed
+    1 30 -> 55 %, no other sequence changed by more than 0.3 points; README, "The frames
+    before a correction: given up, or taken in part"). A re-track's ``taken`` is true when
+    any frame was taken, ``frames_taken`` says how many.
+
+    ``retro_give_up``: a backward track whose energy, less the forward's times ``1 +
+    retro_margin`` and summed from the correction, is above zero and has not reached a new
+    minimum for that many frames is stopped there and refused (0 = never;
+    :func:`.retrack.gave_up`, ``stopped: "worse"`` in ``retracks``; ``retro_take`` may still
+    take the frames next to the correction): it has lost the person or follows a wrong
+    correction, and the rest of its window is work for nothing. Default 5 since 2026-11-27
+    (dev: no sequence changed, 22 % fewer frames re-tracked).
+
+    ``retro_stop``: which earlier corrections a backward track stops at (it always stops at
+    the start). ``"any"``: the frame after any earlier correction whose frames were
+    re-tracked. ``"rank"``: only one of its own kind or of a kind before it in
+    :data:`.retrack.CORRECTION_ORDER` (heading, recovery, limbs): a heading switch's backward
+    track goes on past a limb swap or a recovery (those corrected the limbs or found the
+    person again, with the heading the forward track had, which the switch now says was
+    wrong), a recovery's past a limb swap; a limb swap's stops at any. Where it goes on, the
+    energy rule judges the frames past the earlier correction as any others. ``"any"`` stays
+    the default: of 70 dev sequences it changed one (90_05 seed 2, 50.5 -> 50.4 % within 10
+    cm, its four changed frames 49-55 -> 14-30 cm), and none of 12 train-clip sequences;
+    on the test split, where the failure was found (an informed figure), the 8 sequences it
+    changes gained 8.9 points on average (README, "A heading switch's re-track past an
+    earlier limb swap or recovery").
+
+    ``retro_revoke``: which heading switches their re-track takes back (:data:`RETRO_REVOKES`,
+    :func:`.retrack.revokes`): ``"refused"``, one whose re-track re-tracked frames and took
+    none; ``"unsupported"``, one whose backward track did better on no frame next to it,
+    even where the whole was within the margin; ``"never"`` (default). The switch's frame is
+    tracked again without the heading recheck, its votes and evidence cleared
+    (:func:`.retrack.revoke_switch`; the entry gets ``revoked`` and the ``switch``). A right
+    switch is continuous with the frames before it; a lead that was noise is not.
+    """
+
+    frames: int = 10
+    min_frames: int = 10
+    margin: float = 0.1
+    start_by: str = "unexplained"
+    energy_margin: float = 0.0
+    every: int = 4
+    recheck_margin: float = 0.05
+    votes: int = 2
+    twin_passes: int = 1
+    evidence_drift: float = 0.01
+    evidence_threshold: float = 0.1
+    start_twin: str = "swapped"
+    search_every: int = 0
+    search_margin: float = 0.05
+    search_both: bool = True
+    twin_starts: tuple = ("turned", "rest")
+    limb_every: int = 4
+    limb_margin: float = 0.05
+    refit_level: int = 0
+    twin_climbs: int = 1
+    recheck_tile: int = 0
+    judge_tile: int = 256
+    judge_start: bool = False
+    reseat_every: int = 0
+    reseat_margin: float = 0.01
+    reseat_climbs: int = 1
+    retro_frames: int = 50
+    retro_margin: float = 0.05
+    retro_after: tuple = ("heading", "limbs", "recovery")
+    retro_take: str = "prefix"
+    retro_give_up: int = 5
+    retro_stop: str = "any"
+    retro_revoke: str = "never"
+
+    def __post_init__(self):
+        _one_of(self, "start_by", START_SCORES)
+        _one_of(self, "start_twin", START_TWINS)
+        _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
+                  "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
+                  "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
+                  "reseat_margin", "retro_frames", "retro_margin", "retro_give_up", allow_zero=True)
+        _positive(self, "votes", "twin_passes", "reseat_climbs")
+        _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
+        _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
+        _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
+                                                   f"or false, not {self.judge_start!r}")
+        object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
+        object.__setattr__(self, "retro_after", tuple(self.retro_after))
+        _check(set(self.retro_after) <= set(RETRO_KINDS),
+               f"HeadingSettings.retro_after must be a choice of {', '.join(RETRO_KINDS)}, "
+               f"not {self.retro_after!r}")
+        _one_of(self, "retro_stop", RETRO_STOPS)
+        _one_of(self, "retro_take", RETRO_TAKES)
+        _one_of(self, "retro_revoke", RETRO_REVOKES)
+        _check(len(self.twin_starts) > 0 and set(self.twin_starts) <= set(TWIN_STARTS),
+               f"HeadingSettings.twin_starts must be a non-empty choice of "
+               f"{', '.join(TWIN_STARTS)}, not {self.twin_starts!r}")
