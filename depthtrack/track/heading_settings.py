@@ -204,10 +204,16 @@ class HeadingSettings:
     ``retro_revoke``: which heading switches their re-track takes back (:data:`RETRO_REVOKES`,
     :func:`.retrack.revokes`): ``"refused"``, one whose re-track re-tracked frames and took
     none; ``"unsupported"``, one whose backward track did better on no frame next to it,
-    even where the whole was within the margin; ``"never"`` (default). The switch's frame is
-    tracked again without the heading recheck, its votes and evidence cleared
+    even where the whole was within the margin; ``"never"``. The switch's frame is tracked
+    again without the heading recheck, its votes and evidence cleared
     (:func:`.retrack.revoke_switch`; the entry gets ``revoked`` and the ``switch``). A right
     switch is continuous with the frames before it; a lead that was noise is not.
+    ``"unsupported"`` by default since 2026-11-28: of the 42 dev wide sequences it changes
+    one, walk-back seed 2 (a wrong switch on frame 44, its backward track worse from the
+    first frame), 90.4 -> 100 %; the eight other switches on dev had frames done better next
+    to them -- five right, two in 90_05 seed 2's fast spin, and 05_20 seed 3's wrong one on
+    frame 44, which the image bears out for 13 frames (README, "A switch the frames before
+    it do not bear out").
     """
 
     frames: int = 10
@@ -242,7 +248,7 @@ class HeadingSettings:
     retro_take: str = "prefix"
     retro_give_up: int = 5
     retro_stop: str = "any"
-    retro_revoke: str = "never"
+    retro_revoke: str = "unsupported"
 
     def __post_init__(self):
         _one_of(self, "start_by", START_SCORES)
