@@ -218,10 +218,12 @@ def revoke_switch(tracker, held, before, depth, index: int) -> bool:
     pose, they score about as well as the forward poses (before a switch the two headings
     explain a frame alike, or the recheck would have turned sooner), and the frames next to
     it better (:func:`best_prefix`). A switch whose backward track scores worse from the
-    first frame back says the twin's lead on the switch's frame was noise. ``held[-1]`` (frame ``index``'s pose) is replaced; the tracker's state becomes the
+    first frame back says the twin's lead on the switch's frame was noise.
+
+    ``held[-1]`` (frame ``index``'s pose) is replaced; the tracker's state becomes the
     unswitched one with the re-track entry, ``revoked: true``, appended to its
-    ``retracks``. Returns False, leaving everything as it was, when the unswitched track is
-    dropped on that frame.
+    ``retracks``. Returns False, the switch standing (and no backward frame taken), when
+    the unswitched track is dropped on that frame.
     """
     settings = tracker.settings
     entry = {**tracker.state.retracks[-1], "revoked": True,
