@@ -3,7 +3,8 @@ frames before it tracked again backwards in time from the corrected pose, and th
 rule that decides how many of the backward poses replace the forward ones
 (:attr:`HeadingSettings.retro_frames`, ``retro_after``, ``retro_take``, ``retro_give_up``,
 ``retro_stop``). With ``retro_revoke`` a heading switch whose backward track does not bear
-it out is taken back (:func:`revokes`, :func:`revoke_switch`). The frame loop (:mod:`.loop`) calls these.
+it out is taken back (:func:`revokes`, :func:`revoke_switch`). The frame loop (:mod:`.loop`)
+calls these.
 """
 from __future__ import annotations
 
