@@ -146,10 +146,11 @@ def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
 
 def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
     """With retro_revoke "refused", a heading switch to the wrong heading -- the swapped
-    twin, climbed, injected on frame 8 of a track that faces the right way, the judge's recovery off so that
-    only the re-track can answer it -- is re-tracked, the backward track scores worse from its
-    first frame, and the switch is taken back: no frame back to front. Without it frame 8
-    stays back to front (the recheck turns the track again four frames later)."""
+    twin, climbed, injected on frame 8 of a track that faces the right way, the judge's
+    recovery off so that only the re-track can answer it -- is re-tracked, the backward
+    track scores worse from its first frame, and the switch is taken back: no frame back to
+    front. Without it frame 8 stays back to front (the recheck turns the track again four
+    frames later)."""
     import depthtrack.track.rechecks as rechecks
     from depthtrack.body.facing import back_to_front
 
