@@ -87,16 +87,6 @@ def test_a_backward_track_is_given_up_once_it_scores_worse_frame_after_frame():
     assert gave_up(back + lost * 5, 0.05, 5)
 
 
-def test_a_switch_is_taken_back_by_the_rule_asked_for():
-    """retro_revoke's rules over (frames taken, frames next to the switch done better)."""
-    from depthtrack.track.retrack import revokes
-
-    cases = [(0, 0), (5, 0), (3, 3), (0, 2)]   # refused; taken whole but worse next to it; ...
-    assert [revokes("never", *c) for c in cases] == [False] * 4
-    assert [revokes("refused", *c) for c in cases] == [True, False, False, True]
-    assert [revokes("unsupported", *c) for c in cases] == [True, True, False, False]
-
-
 def test_a_correction_is_told_by_its_kind_and_the_forward_track_by_what_it_has():
     from depthtrack.track.retrack import _forward_agrees, new_correction
     before = TrackingState(recoveries=({"frame": 1, "frames_to_recover": 0},))
@@ -142,53 +132,3 @@ def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
     assert reach_after(after_turn, "limbs", 40, "rank")["heading"] == 31
     with pytest.raises(ValueError, match="retro_stop"):
         TrackerSettings(heading={"retro_stop": "never"})
-
-
-def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
-    """With retro_revoke "refused", a heading switch to the wrong heading -- the swapped
-    twin, climbed, injected on frame 8 of a track that faces the right way, the judge's
-    recovery off so that only the re-track can answer it -- is re-tracked, the backward
-    track scores worse from its first frame, and the switch is taken back: no frame back to
-    front. Without it frame 8 stays back to front (the recheck turns the track again four
-    frames later)."""
-    import depthtrack.track.rechecks as rechecks
-    from depthtrack.body.facing import back_to_front
-
-    body = BodyModel.default(height=1.75)
-    x0 = fit_pose_to_joints(body, squat.joints[0])
-    wrong_on = 8
-    real = rechecks.recheck_heading
-
-    def switching_on_one_frame(state, pose, refit, twins, pixels, settings, judge=None):
-        if state.frame != wrong_on or not settings.heading.every:
-            return real(state, pose, refit, twins, pixels, settings, judge)
-        twin, _ = refit(np.asarray(twins(pose)).reshape(-1, len(pose))[0])
-        switch = {"frame": state.frame, "energy_kept": 0.0, "energy_turned": 0.0,
-                  "by": "injected", "evidence": 0.0}
-        return twin, {"heading_votes": 0, "heading_evidence": 0.0,
-                      "heading_switches": state.heading_switches + (switch,)}, True
-    monkeypatch.setattr(rechecks, "recheck_heading", switching_on_one_frame)
-    base = TrackerSettings().updated({"search": {"untwist": []},
-                                      "heading": {"retro_frames": 10, "every": 4},
-                                      "judge": {"lost_ratio": 100.0},
-                                      "propose": {"lost_frames": 1000}})
-    runs = {}
-    for revoke in ("never", "refused"):
-        settings = base.updated({"heading": {"retro_revoke": revoke}})
-        with Tracker(body, squat.camera, settings=settings) as tracker:
-            poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(len(squat))),
-                                                  init_pose=x0)]
-            runs[revoke] = (tracker.describe(), body.joint_positions(np.array(poses)))
-    info, joints = runs["never"]
-    assert info["heading_switches"][0]["index"] == wrong_on
-    assert back_to_front(joints, squat.joints)[wrong_on] == 1.0      # the injected switch
-    first = info["retracks"][0]
-    assert first["index"] == wrong_on and not first["taken"] and "revoked" not in first
-    info, joints = runs["refused"]
-    entry = info["retracks"][0]
-    assert entry["revoked"] and entry["index"] == wrong_on and entry["switch"]["by"] == "injected"
-    assert entry["frames"] > 0 and entry["frames_taken"] == 0 and entry["frames_better"] == 0
-    assert entry["energy_backward"] > entry["energy_forward"]
-    assert all(s["index"] != wrong_on for s in info["heading_switches"])
-    assert not np.any(back_to_front(joints, squat.joints) == 1.0)
-    assert point_errors(joints, squat.joints).mean(axis=-1).max() < 0.1

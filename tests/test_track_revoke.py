@@ -1,0 +1,72 @@
+"""A heading switch taken back when the frames before it do not bear it out
+(``HeadingSettings.retro_revoke``, issue 10): the rules in closed form, and a wrong switch
+injected into a track that faces the right way, on a short synthetic ToF sequence."""
+import numpy as np
+
+from depthtrack.body import BodyModel
+from depthtrack.evaluate.metrics import point_errors
+from depthtrack.track import TrackerSettings
+from depthtrack.track.tracker import Tracker, fit_pose_to_joints
+
+
+def test_a_switch_is_taken_back_by_the_rule_asked_for():
+    """retro_revoke's rules over (frames taken, frames next to the switch done better)."""
+    from depthtrack.track.retrack import revokes
+
+    cases = [(0, 0), (5, 0), (3, 3), (0, 2)]   # refused; taken whole but worse next to it; ...
+    assert [revokes("never", *c) for c in cases] == [False] * 4
+    assert [revokes("refused", *c) for c in cases] == [True, False, False, True]
+    assert [revokes("unsupported", *c) for c in cases] == [True, True, False, False]
+
+
+
+def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
+    """With retro_revoke "refused", a heading switch to the wrong heading -- the swapped
+    twin, climbed, injected on frame 8 of a track that faces the right way, the judge's
+    recovery off so that only the re-track can answer it -- is re-tracked, the backward
+    track scores worse from its first frame, and the switch is taken back: no frame back to
+    front. Without it frame 8 is back to front (the recheck would turn the track again four
+    frames later; ten frames are tracked)."""
+    import depthtrack.track.rechecks as rechecks
+    from depthtrack.body.facing import back_to_front
+
+    body = BodyModel.default(height=1.75)
+    x0 = fit_pose_to_joints(body, squat.joints[0])
+    wrong_on = 8
+    real = rechecks.recheck_heading
+
+    def switching_on_one_frame(state, pose, refit, twins, pixels, settings, judge=None):
+        if state.frame != wrong_on or not settings.heading.every:
+            return real(state, pose, refit, twins, pixels, settings, judge)
+        twin, _ = refit(np.asarray(twins(pose)).reshape(-1, len(pose))[0])
+        switch = {"frame": state.frame, "energy_kept": 0.0, "energy_turned": 0.0,
+                  "by": "injected", "evidence": 0.0}
+        return twin, {"heading_votes": 0, "heading_evidence": 0.0,
+                      "heading_switches": state.heading_switches + (switch,)}, True
+    monkeypatch.setattr(rechecks, "recheck_heading", switching_on_one_frame)
+    base = TrackerSettings().updated({"search": {"untwist": []},
+                                      "heading": {"retro_frames": 10, "every": 4},
+                                      "judge": {"lost_ratio": 100.0},
+                                      "propose": {"lost_frames": 1000}})
+    runs = {}
+    frames = 10                          # the switch on 8, the recheck's next turn on 12
+    for revoke in ("never", "refused"):
+        settings = base.updated({"heading": {"retro_revoke": revoke}})
+        with Tracker(body, squat.camera, settings=settings) as tracker:
+            poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(frames)),
+                                                  init_pose=x0)]
+            runs[revoke] = (tracker.describe(), body.joint_positions(np.array(poses)))
+    info, joints = runs["never"]
+    assert info["heading_switches"][0]["index"] == wrong_on
+    truth = squat.joints[:frames]
+    assert back_to_front(joints, truth)[wrong_on] == 1.0      # the injected switch
+    first = info["retracks"][0]
+    assert first["index"] == wrong_on and not first["taken"] and "revoked" not in first
+    info, joints = runs["refused"]
+    entry = info["retracks"][0]
+    assert entry["revoked"] and entry["index"] == wrong_on and entry["switch"]["by"] == "injected"
+    assert entry["frames"] > 0 and entry["frames_taken"] == 0 and entry["frames_better"] == 0
+    assert entry["energy_backward"] > entry["energy_forward"]
+    assert all(s["index"] != wrong_on for s in info["heading_switches"])
+    assert not np.any(back_to_front(joints, truth) == 1.0)
+    assert point_errors(joints, truth).mean(axis=-1).max() < 0.1
