@@ -7,7 +7,7 @@ from depthtrack.body import BodyModel, default_mesh_path
 from depthtrack.contract import JOINT_INDEX
 
 
-@pytest.fixture(scope="module", params=["full", "decimated"])
+@pytest.fixture(scope="module", params=["full", "decimated", "coarse"])
 def body(request):
     return BodyModel.default(mesh=request.param)
 
@@ -32,10 +32,8 @@ def test_mesh_is_closed_and_outward(body):
 
 
 def test_triangle_budget_and_file_size(body):
-    if body.mesh_name == "full":
-        assert 4000 <= body.mesh.num_faces <= 8000
-    else:
-        assert 800 <= body.mesh.num_faces <= 1200
+    lo, hi = {"full": (4000, 8000), "decimated": (800, 1200), "coarse": (400, 600)}[body.mesh_name]
+    assert lo <= body.mesh.num_faces <= hi
     assert default_mesh_path(body.mesh_name).stat().st_size < 1_000_000
 
 

@@ -44,6 +44,8 @@ def test_bench_json_reports_every_cell_and_the_mesh_size(capsys):
         [(16, 2), (16, 5), (32, 2), (32, 5)]
     assert all(r["candidates_per_s"] > 0 for r in report["results"])
     assert report["gl_renderer"]
+    assert [b["tile"] for b in report["breakdown"]] == [16, 32]
+    assert all(0 <= b["geometry_cpu_ms"] and b["render_cpu_ms"] > 0 for b in report["breakdown"])
 
 
 def test_bench_rejects_a_tile_that_is_not_a_power_of_two(capsys):

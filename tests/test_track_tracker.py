@@ -273,3 +273,17 @@ def test_the_search_with_leg_poses_finds_a_kick_the_grid_alone_misses():
             assert info["chosen_legs"] in ("down", *LEG_POSES)
     assert errors["always"] < 0.10, errors
     assert errors["never"] > 0.2, errors
+
+
+def test_the_coarse_render_mesh_scores_with_half_the_triangles_and_tracks(scene):
+    """``observe.render_mesh = "coarse"``: the candidates are drawn with the 500-triangle
+    mesh (the start's and the height fit's renderers too) and a short track from the true
+    first pose stays on the joints."""
+    body, truth, frames = scene
+    settings = TrackerSettings().updated({"observe": {"render_mesh": "coarse"}})
+    with Tracker(body, CAMERA, method="hc", segmenter=_segment, settings=settings) as coarse, \
+            Tracker(body, CAMERA, method="hc", segmenter=_segment) as decimated:
+        assert coarse.render_body.mesh.num_faces < 0.6 * decimated.render_body.mesh.num_faces
+        assert coarse.renderers.coarse.body is coarse.render_body
+        out = [coarse.init(frames[0], pose=truth[0])] + [coarse.step(d) for d in frames[1:4]]
+    assert (_errors(body, out, truth[:4]) < 0.10).mean() > 0.95

@@ -1,12 +1,14 @@
 """Build the default skinned body meshes shipped in depthtrack/data/meshes/.
 
     .venv/bin/python tools/make_body_mesh.py [--voxel 0.005] [--full 6000] [--decimated 1000]
+                                             [--coarse 500]
 
 Polygonises the implicit body of :mod:`depthtrack.body.anthropometry` (a smooth
 union of capsules and ellipsoids on Winter's proportions for a 1.75 m adult) with
 marching cubes, smooths it (Taubin, volume preserving), decimates it with quadric
-edge collapse to the two levels of detail, computes the skinning weights
-(distance to the bones, top 4 normalised) and writes glTF 2.0 skins. Both meshes are
+edge collapse to three levels of detail (full; decimated, the tracker's candidates;
+coarse, a cheaper candidate mesh: ``ObserveSettings.render_mesh``), computes the skinning
+weights (distance to the bones, top 4 normalised) and writes glTF 2.0 skins. Every mesh is
 checked to be closed, consistently oriented and single-shelled before writing.
 
 Needs the tool extras: ``pip install -e '.[tools]'`` (scikit-image, fast-simplification).
@@ -106,7 +108,7 @@ def check(mesh, label):
 
 
 def build(voxel=0.005, full_faces=6000, decimated_faces=1000, smooth_iterations=20, out_dir=OUT_DIR,
-          blend_width=0.025):
+          blend_width=0.025, coarse_faces=500):
     import trimesh
 
     from scipy.spatial import cKDTree
@@ -119,7 +121,8 @@ def build(voxel=0.005, full_faces=6000, decimated_faces=1000, smooth_iterations=
     nearest = cKDTree(dense.vertices)
     joints, head = rest_joint_positions()
     meshes = {label: decimate(dense, target)
-              for label, target in (("full", full_faces), ("decimated", decimated_faces))}
+              for label, target in (("full", full_faces), ("decimated", decimated_faces),
+                                            ("coarse", coarse_faces))}
     # Smoothing and the finite grid shave a few millimetres off the head and soles; scale
     # both levels (and the skeleton) about the pelvis so the full mesh is exactly
     # REFERENCE_HEIGHT tall and BodyModel.default(1.75) needs no further scale.
@@ -146,11 +149,12 @@ def main(argv=None):
     ap.add_argument("--voxel", type=float, default=0.005, help="marching-cubes cell size in metres")
     ap.add_argument("--full", type=int, default=6000, help="triangles of the full mesh")
     ap.add_argument("--decimated", type=int, default=1000, help="triangles of the decimated mesh")
+    ap.add_argument("--coarse", type=int, default=500, help="triangles of the coarse mesh")
     ap.add_argument("--smooth", type=int, default=20, help="Taubin smoothing iterations")
     ap.add_argument("--out", type=Path, default=OUT_DIR, help="output folder")
     args = ap.parse_args(argv)
     for label, (path, nv, nf, size) in build(args.voxel, args.full, args.decimated, args.smooth,
-                                             args.out).items():
+                                             args.out, coarse_faces=args.coarse).items():
         print(f"{label}: {path.relative_to(ROOT) if path.is_relative_to(ROOT) else path}: "
               f"{nv} vertices, {nf} triangles, {size / 1024:.0f} KiB")
     return 0

@@ -15,7 +15,8 @@ from .skeleton import (CONTRACT_SOURCE, DOF, JOINTS, JOINT_ID, LOWER, NUM_JOINTS
                        POSE_NAMES, UPPER, as_batch, children_of, forward_kinematics)
 
 #: Level-of-detail names of the shipped default mesh and their files in depthtrack/data/meshes/.
-DEFAULT_MESH_FILES = {"full": "body_full.glb", "decimated": "body_decimated.glb"}
+DEFAULT_MESH_FILES = {"full": "body_full.glb", "decimated": "body_decimated.glb",
+                      "coarse": "body_coarse.glb"}
 
 #: ``format`` of a body description (:meth:`BodyModel.to_json`, a track's ``body.json``).
 BODY_FORMAT = "depthtrack-body/1"
@@ -26,7 +27,8 @@ SEGMENT_KEYS = tuple(JOINTS[1:]) + ("head",)
 
 
 def default_mesh_path(lod="full") -> Path:
-    """Path of the shipped default body mesh for ``lod`` ("full" or "decimated")."""
+    """Path of the shipped default body mesh for ``lod`` ("full", "decimated" or "coarse":
+    about 6,000, 1,000 and 500 triangles, ``tools/make_body_mesh.py``)."""
     if lod not in DEFAULT_MESH_FILES:
         raise ValueError(f"mesh must be one of {sorted(DEFAULT_MESH_FILES)}, got {lod!r}")
     return Path(str(resources.files("depthtrack") / "data" / "meshes" / DEFAULT_MESH_FILES[lod]))
@@ -120,7 +122,8 @@ class BodyModel:
     # ------------------------------------------------------------------ construction
     @classmethod
     def default(cls, height=1.75, mesh="full", shape=None):
-        """The shipped default body scaled to ``height`` metres, with ``mesh`` "full" or "decimated".
+        """The shipped default body scaled to ``height`` metres, with ``mesh`` "full", "decimated"
+        or "coarse".
 
         ``shape``: a :class:`~depthtrack.body.shape.BodyShape` (relative proportions); the
         body is then scaled so that its standing height is still ``height``.
@@ -183,7 +186,8 @@ class BodyModel:
         return self._copy(scale=height / unit.height, segment_scale=seg)
 
     def with_mesh(self, mesh):
-        """A copy with another mesh of the same skeleton: "full", "decimated" or a SkinnedMesh."""
+        """A copy with another mesh of the same skeleton: "full", "decimated", "coarse" or a
+        SkinnedMesh."""
         if isinstance(mesh, SkinnedMesh):
             return self._copy(mesh=mesh, mesh_name=mesh.name)
         if mesh not in self._lods:

@@ -16,10 +16,13 @@ def register(subparsers) -> None:
                     "read-back) and print candidates per second per tile size and batch size, "
                     "with the GL renderer in use and the mesh size.",
         epilog="examples:\n  depthtrack bench\n  depthtrack bench --quick --json\n"
-               "  depthtrack bench --mesh full --tiles 64 --batches 256 1024",
+               "  depthtrack bench --mesh full --tiles 64 --batches 256 1024\n"
+               "  depthtrack bench --mesh DIR/body_decimated.glb --tiles 64 --batches 16 64",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--mesh", choices=("decimated", "full"), default="decimated",
-                   help="body mesh to render (default decimated, ~1000 triangles)")
+    p.add_argument("--mesh", default="decimated", metavar="MESH",
+                   help="body mesh to render: decimated (default, ~1000 triangles, the "
+                        "tracker's), full (~6000), or a skinned .glb of the default skeleton "
+                        "(e.g. from tools/make_body_mesh.py --decimated 500 --out DIR)")
     p.add_argument("--tiles", type=integer(4, 1024), nargs="+", default=None, metavar="T",
                    help="tile sizes in pixels, powers of two (default 32 64 128)")
     p.add_argument("--batches", type=integer(1, 65536), nargs="+", default=None, metavar="N",

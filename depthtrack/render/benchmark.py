@@ -19,6 +19,8 @@ from .frame import FrameRenderer
 from .tiles import TileRenderer
 
 TILES = (32, 64, 128)
+#: GL_RASTERIZER_DISCARD: primitives are processed up to the rasteriser and dropped there.
+GL_RASTERIZER_DISCARD = 0x8C89
 BATCHES = (16, 64, 256, 1024)
 
 
@@ -71,13 +73,34 @@ def _timed(fn, seconds: float, min_calls: int = 3, cpu: bool = False):
     return float(np.median(times))
 
 
+def _bench_body(mesh: str):
+    """The default body with the shipped mesh ``mesh`` names, or with the skinned glTF at
+    path ``mesh`` (:class:`~depthtrack.errors.InputError` naming the file when it is not a
+    mesh of the default skeleton)."""
+    from ..body import BodyModel
+    from ..body.gltf import load_skinned_gltf
+    from ..errors import InputError
+
+    if mesh in ("decimated", "full"):
+        return BodyModel.default(mesh=mesh)
+    body = BodyModel.default()
+    skinned = load_skinned_gltf(mesh).mesh
+    if len(skinned.inverse_bind) != len(body.mesh.inverse_bind):
+        raise InputError(mesh, f"skinned to {len(skinned.inverse_bind)} joints; the default "
+                               f"body has {len(body.mesh.inverse_bind)}")
+    return body.with_mesh(skinned)
+
+
 def benchmark_tiles(mesh: str = "decimated", tiles=TILES, batches=BATCHES, seconds: float = 0.5,
                     smoothed: bool = True, seed: int = 0, progress=None) -> dict:
     """Candidates per second of :meth:`TileRenderer.costs` per tile size and batch size.
 
     Parameters
     ----------
-    mesh : {"decimated", "full"}
+    mesh : {"decimated", "full"} or path
+        A shipped level of detail, or a skinned glTF of the default skeleton (e.g. one
+        built by ``tools/make_body_mesh.py --decimated 500 --out DIR``: another triangle
+        count).
     tiles, batches : sequences of int
     seconds : float
         Wall time spent timing each (tile, batch) cell; the median call is reported.
@@ -92,12 +115,12 @@ def benchmark_tiles(mesh: str = "decimated", tiles=TILES, batches=BATCHES, secon
         ``gl_renderer``, ``gl_version``, ``mesh`` (name, vertices, triangles), ``results``
         (one row per cell: tile, batch, candidates_per_s, ms_per_call, cpu_us_per_candidate)
         and ``breakdown`` (per tile at the largest batch: CPU milliseconds in skinning
-        matrices, upload + render, cost pass + reduction + read-back).
+        matrices, upload + render, cost pass + reduction + read-back; and
+        ``geometry_cpu_ms``, the part of upload + render left with every primitive dropped
+        at the rasteriser: vertex shader, clipping, primitive assembly).
     """
-    from ..body import BodyModel
-
     ctx = gl_context()
-    body = BodyModel.default(mesh=mesh)
+    body = _bench_body(mesh)
     camera = Camera.preset("sr4000")
     pose, observed, roi = _scene(body, camera, seed)
     rng = np.random.default_rng(seed)
@@ -127,6 +150,16 @@ def benchmark_tiles(mesh: str = "decimated", tiles=TILES, batches=BATCHES, secon
                 renderer._draw(first, count, grid)
             renderer._fbo.read(viewport=(0, 0, 1, 1), components=1, dtype="f4")  # waits for it
         _, render = _timed(render_only, seconds / 3, cpu=True)
+
+        def vertices_only():
+            # the same draws with every primitive dropped at the rasteriser: what is left is
+            # the geometry's work (vertex shader, clipping, primitive assembly)
+            ctx.enable_direct(GL_RASTERIZER_DISCARD)
+            try:
+                render_only()
+            finally:
+                ctx.disable_direct(GL_RASTERIZER_DISCARD)
+        _, geometry = _timed(vertices_only, seconds / 3, cpu=True)
         # the cost pass alone, on the atlas of the last pass that render_only left behind
         _, last_count, last_grid = list(renderer._passes(len(poses)))[-1]
         program = renderer._cost_program(smoothed)
@@ -144,11 +177,12 @@ def benchmark_tiles(mesh: str = "decimated", tiles=TILES, batches=BATCHES, secon
         total = results[-1]["cpu_us_per_candidate"] * len(poses) / 1e6
         breakdown.append(dict(tile=tile, batch=len(poses), skin_cpu_ms=1e3 * skin,
                               render_cpu_ms=1e3 * (render - skin),
+                              geometry_cpu_ms=1e3 * max(geometry - skin, 0.0),
                               cost_cpu_ms=1e3 * cost * len(poses) / last_count,
                               total_cpu_ms=1e3 * total))
         renderer.release()
     return dict(**gl_info(),
-                mesh=dict(name=mesh, vertices=int(len(body.mesh.vertices)),
+                mesh=dict(name=str(mesh), vertices=int(len(body.mesh.vertices)),
                           triangles=int(len(body.faces))),
                 back_faces_culled=bool(cull), smoothed=bool(smoothed),
                 camera="sr4000 176x144", roi=[round(float(x), 1) for x in roi],
@@ -182,7 +216,8 @@ def format_report(report: dict) -> str:
     lines.append("where the time goes (CPU ms per call at the largest batch):")
     for b in report["breakdown"]:
         lines.append(f"  tile {b['tile']:>3d} x {b['batch']}: skinning matrices (numpy) "
-                     f"{b['skin_cpu_ms']:.1f}, upload + render {b['render_cpu_ms']:.1f}, "
+                     f"{b['skin_cpu_ms']:.1f}, upload + render {b['render_cpu_ms']:.1f} "
+                     f"(of which geometry {b['geometry_cpu_ms']:.1f}), "
                      f"cost pass + reduction + read-back {b['cost_cpu_ms']:.1f} "
                      f"(timed apart); whole costs() call {b['total_cpu_ms']:.1f}")
     lines.append(f"glGenerateMipmap is an exact box mean on this driver: "

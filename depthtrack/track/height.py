@@ -70,7 +70,7 @@ def fit_body_height(depth, foreground, camera, fps: float = 25.0, settings=None,
                 body = BodyModel.default(height=h)
                 if renderers is None:
                     # the start never polishes: no fine renderer
-                    renderers = RendererSet(body.with_mesh("decimated"), camera,
+                    renderers = RendererSet(body.with_mesh(settings.observe.render_mesh), camera,
                                             settings.observe.tile)
                 tracker = Tracker(body, camera, method="hc", fps=fps, settings=settings,
                                   segmenter=segmenter, renderers=renderers)

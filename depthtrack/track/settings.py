@@ -35,6 +35,11 @@ from .heading_settings import (START_SCORES, START_TWINS, TWIN_STARTS,  # noqa: 
 from .start_settings import FACINGS, HeightSettings, ShapeSettings, StartSettings  # noqa: F401
 
 
+#: Levels of detail of the default body a tracker can render candidates with
+#: (:attr:`ObserveSettings.render_mesh`; ``depthtrack.body.model.DEFAULT_MESH_FILES``).
+RENDER_MESHES = ("decimated", "coarse", "full")
+
+
 @dataclass(frozen=True)
 class ObserveSettings:
     """Observe: the ROI, the observed image and whether a person is there.
@@ -43,6 +48,12 @@ class ObserveSettings:
     ----------
     tile : int
         Tile side of the candidate renderer (pixels, a power of two).
+    render_mesh : str
+        The level of detail of the default body's mesh that candidates are rendered with
+        (:data:`RENDER_MESHES`): "decimated" (about 1,000 triangles, the default), "coarse"
+        (500: a candidate costs about a fifth less on llvmpipe, where half of it is the
+        triangles' geometry work) or "full" (6,000). A body of the user's own (a glTF) has
+        one mesh and renders with it.
     roi_margin : float
         Margin around the foreground box, as a fraction of its larger side.
     predicted_margin : float
@@ -63,6 +74,7 @@ class ObserveSettings:
     """
 
     tile: int = 64
+    render_mesh: str = "decimated"
     roi_margin: float = 0.15
     predicted_margin: float = 0.15
     depth_band: float = 0.4
@@ -73,6 +85,7 @@ class ObserveSettings:
 
     def __post_init__(self):
         _power_of_two(self.tile, "tile")
+        _one_of(self, "render_mesh", RENDER_MESHES)
         _positive(self, "roi_margin", "predicted_margin", "depth_band", "min_person_area",
                   allow_zero=True)
         _check(int(self.absent_frames) >= 1,
@@ -92,6 +105,12 @@ class EnergySettings:
     ----------
     damping : float
         Velocity damping of the prediction (1 = constant velocity).
+    turn_damping : float or None
+        Damping of the pelvis's rotation alone (None = ``damping``). A body that spins
+        keeps turning (its angular momentum in a jump is conserved); at 0.7 the prediction
+        asks each frame for 30 % less turn than the last, the likelihood barely sees the
+        heading of a turning trunk, and a steady spin's track falls behind it a few degrees
+        a frame (dev 90_05, a jump kick: the hips 50 to 80 degrees behind mid-turn).
     likelihood_weight : float
         ``w`` of the energy.
     pose_prior_std : float
@@ -108,6 +127,7 @@ class EnergySettings:
     """
 
     damping: float = 0.7
+    turn_damping: float | None = None
     likelihood_weight: float = 1.0
     pose_prior_std: float = 1.0
     twist_std: float = 0.3
@@ -115,6 +135,8 @@ class EnergySettings:
     def __post_init__(self):
         _positive(self, "damping", "likelihood_weight", "pose_prior_std", "twist_std",
                   allow_zero=True)
+        if self.turn_damping is not None:
+            _positive(self, "turn_damping", allow_zero=True)
 
 
 @dataclass(frozen=True)

@@ -97,7 +97,7 @@ class Tracker:
         self.settings = s = settings or TrackerSettings()
         self.body = body
         try:
-            self.render_body = body.with_mesh("decimated")
+            self.render_body = body.with_mesh(s.observe.render_mesh)
         except (ValueError, AttributeError):
             self.render_body = body
         self.camera = camera
@@ -105,7 +105,8 @@ class Tracker:
         self.likelihood = likelihood
         self.smoothed = likelihood == "smoothed"
         self.fps = float(fps)
-        self.prior = prior or ConstantVelocityPrior.load(fps=self.fps, damping=s.energy.damping)
+        self.prior = prior or ConstantVelocityPrior.load(fps=self.fps, damping=s.energy.damping,
+                                                         turn_damping=s.energy.turn_damping)
         if segmenter is None:
             from ..detect import segment_foreground as segmenter
         self.segmenter = segmenter
