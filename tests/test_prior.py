@@ -72,37 +72,6 @@ def test_prediction_and_penalty():
     assert prior.penalty(moved[None], x_prev, v_pred)[0] == pytest.approx(2.0)
 
 
-def test_turn_damping_acts_on_the_pelvis_rotation_alone():
-    """A steady spin (the pelvis turning 0.2 rad a frame about its vertical) is predicted
-    whole with turn_damping 1 while every other velocity keeps ``damping``; the spin's
-    predicted pose is then exactly one more step of the turn."""
-    v_prev = np.zeros(48)
-    v_prev[4] = 0.2                               # pelvis ry
-    v_prev[0] = 0.02                              # pelvis x, m / frame
-    v_prev[15] = 0.2                              # a joint's rotation
-    damped = ConstantVelocityPrior(np.full(48, 25.0), fps=25.0, damping=0.7)
-    spinning = ConstantVelocityPrior(np.full(48, 25.0), fps=25.0, damping=0.7, turn_damping=1.0)
-    np.testing.assert_allclose(damped.predict_velocity(v_prev)[[0, 4, 15]], [0.014, 0.14, 0.14])
-    np.testing.assert_allclose(spinning.predict_velocity(v_prev)[[0, 4, 15]], [0.014, 0.2, 0.14])
-    x_prev = np.zeros(48)
-    x_prev[4] = 1.0
-    x_pred, _ = spinning.predict(x_prev, v_prev)
-    assert x_pred[4] == pytest.approx(1.2)        # about one axis rotations add
-    batch = np.stack([v_prev, 2 * v_prev])        # batched like the velocities of candidates
-    assert spinning.predict_velocity(batch)[:, 4] == pytest.approx([0.2, 0.4])
-    assert spinning.to_dict()["turn_damping"] == 1.0 and "turn_damping" not in damped.to_dict()
-
-
-def test_turn_damping_setting_layers_and_is_checked():
-    from depthtrack.track.settings import EnergySettings, TrackerSettings
-    from depthtrack.errors import InputError
-    assert EnergySettings().turn_damping is None
-    s = TrackerSettings().updated({"energy": {"turn_damping": 0.9}})
-    assert s.energy.turn_damping == 0.9 and s.energy.damping == 0.7
-    with pytest.raises(InputError, match="turn_damping"):
-        EnergySettings(turn_damping=-0.1)
-
-
 def test_shipped_prior_loads():
     prior = ConstantVelocityPrior.load(fps=25.0)
     assert prior.accel_std.shape == (48,) and np.all(prior.accel_std > 0)

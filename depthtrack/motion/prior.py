@@ -47,9 +47,6 @@ from ..errors import InputError
 DOF = 48
 NUM_ROTATIONS = 15
 
-#: The pelvis's rotation in a pose or velocity vector.
-ROOT_ROTATION = slice(3, 6)
-
 #: Shipped prior, made by tools/make_motion_prior.py.
 DEFAULT_PRIOR_FILE = "motion_prior.json"
 
@@ -134,8 +131,6 @@ class ConstantVelocityPrior:
     damping : float
         Factor on the previous velocity in the prediction (1 = the paper's constant-velocity
         model; below 1 damps velocities estimated from noisy poses).
-    turn_damping : float or None
-        The factor for the pelvis's rotation (``[3:6]``) alone; None = ``damping``.
     min_velocity_std : (48,) float or float
         Floor on the per-frame velocity standard deviation, so parameters that barely move
         in the training motions keep a usable search range.
@@ -151,7 +146,6 @@ class ConstantVelocityPrior:
     accel_std: np.ndarray
     fps: float
     damping: float = 1.0
-    turn_damping: float | None = None
     min_velocity_std: object = 0.0
     source: dict = field(default_factory=dict)
 
@@ -212,11 +206,7 @@ class ConstantVelocityPrior:
     # ------------------------------------------------------------------ model
     def predict_velocity(self, velocity):
         """Mean of ``p(v_t | v_{t-1})``: ``(..., 48) -> (..., 48)``."""
-        velocity = np.asarray(velocity, dtype=np.float64)
-        v = self.damping * velocity
-        if self.turn_damping is not None:
-            v[..., ROOT_ROTATION] = self.turn_damping * velocity[..., ROOT_ROTATION]
-        return v
+        return self.damping * np.asarray(velocity, dtype=np.float64)
 
     def predict(self, pose, velocity):
         """Predicted ``(x_t, v_t)`` means from ``x_{t-1} (48,)`` and ``v_{t-1} (48,)``."""
@@ -257,6 +247,4 @@ class ConstantVelocityPrior:
 
     def to_dict(self) -> dict:
         return {"model": "v_t ~ N(damping v_{t-1}, Sigma), Sigma = diag(accel_std^2) / fps^4",
-                "fps": self.fps, "damping": self.damping,
-                **({} if self.turn_damping is None else {"turn_damping": self.turn_damping}),
-                **self.source}
+                "fps": self.fps, "damping": self.damping, **self.source}

@@ -105,12 +105,6 @@ class EnergySettings:
     ----------
     damping : float
         Velocity damping of the prediction (1 = constant velocity).
-    turn_damping : float or None
-        Damping of the pelvis's rotation alone (None = ``damping``). A body that spins
-        keeps turning (its angular momentum in a jump is conserved); at 0.7 the prediction
-        asks each frame for 30 % less turn than the last, the likelihood barely sees the
-        heading of a turning trunk, and a steady spin's track falls behind it a few degrees
-        a frame (dev 90_05, a jump kick: the hips 50 to 80 degrees behind mid-turn).
     likelihood_weight : float
         ``w`` of the energy.
     pose_prior_std : float
@@ -127,7 +121,6 @@ class EnergySettings:
     """
 
     damping: float = 0.7
-    turn_damping: float | None = None
     likelihood_weight: float = 1.0
     pose_prior_std: float = 1.0
     twist_std: float = 0.3
@@ -135,8 +128,6 @@ class EnergySettings:
     def __post_init__(self):
         _positive(self, "damping", "likelihood_weight", "pose_prior_std", "twist_std",
                   allow_zero=True)
-        if self.turn_damping is not None:
-            _positive(self, "turn_damping", allow_zero=True)
 
 
 @dataclass(frozen=True)

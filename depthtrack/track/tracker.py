@@ -105,8 +105,7 @@ class Tracker:
         self.likelihood = likelihood
         self.smoothed = likelihood == "smoothed"
         self.fps = float(fps)
-        self.prior = prior or ConstantVelocityPrior.load(fps=self.fps, damping=s.energy.damping,
-                                                         turn_damping=s.energy.turn_damping)
+        self.prior = prior or ConstantVelocityPrior.load(fps=self.fps, damping=s.energy.damping)
         if segmenter is None:
             from ..detect import segment_foreground as segmenter
         self.segmenter = segmenter
