@@ -72,6 +72,35 @@ def test_prediction_and_penalty():
     assert prior.penalty(moved[None], x_prev, v_pred)[0] == pytest.approx(2.0)
 
 
+def test_huber_penalty_is_quadratic_inside_and_linear_beyond():
+    """Huber's loss against its closed form: the Gaussian's penalty up to k standard
+    deviations, a straight line of slope k beyond, so a 10-sigma change of velocity costs
+    25.5 instead of 50 at k = 3; k = 0 is the Gaussian prior exactly."""
+    from depthtrack.motion.prior import huber_penalty
+    assert huber_penalty(np.array([[0.0, 1.0, -3.0, 10.0]]), 3.0)[0] == pytest.approx(
+        0.0 + 0.5 + 4.5 + (30.0 - 4.5))
+    gaussian = ConstantVelocityPrior(np.full(48, 25.0), fps=25.0, damping=0.5)   # sigma 0.04
+    robust = ConstantVelocityPrior(np.full(48, 25.0), fps=25.0, damping=0.5, huber=3.0)
+    x_prev, v_prev = np.zeros(48), np.zeros(48)
+    x_pred, v_pred = robust.predict(x_prev, v_prev)
+    near, far = x_pred.copy(), x_pred.copy()
+    near[0] += 0.08                               # 2 sigmas: inside, both 2.0
+    far[0] += 0.4                                 # 10 sigmas: 50 against 25.5
+    assert robust.penalty(near[None], x_prev, v_pred)[0] == pytest.approx(2.0)
+    assert gaussian.penalty(far[None], x_prev, v_pred)[0] == pytest.approx(50.0)
+    assert robust.penalty(far[None], x_prev, v_pred)[0] == pytest.approx(25.5)
+    assert robust.to_dict()["huber"] == 3.0 and "huber" not in gaussian.to_dict()
+
+
+def test_prior_huber_setting_layers_and_is_checked():
+    from depthtrack.errors import InputError
+    from depthtrack.track.settings import EnergySettings, TrackerSettings
+    assert EnergySettings().prior_huber == 0.0
+    assert TrackerSettings().updated({"energy": {"prior_huber": 3.0}}).energy.prior_huber == 3.0
+    with pytest.raises(InputError, match="prior_huber"):
+        EnergySettings(prior_huber=-1.0)
+
+
 def test_shipped_prior_loads():
     prior = ConstantVelocityPrior.load(fps=25.0)
     assert prior.accel_std.shape == (48,) and np.all(prior.accel_std > 0)

@@ -118,6 +118,14 @@ def accelerations_of(poses, fps: float):
     return np.diff(v, axis=0) * float(fps) ** 2
 
 
+def huber_penalty(z, k: float):
+    """``(..., D) -> (...)``: Huber's loss of standardised residuals ``z`` summed over the
+    last axis, ``z^2 / 2`` where ``|z| <= k`` and ``k |z| - k^2 / 2`` beyond (continuous, with
+    a continuous slope, at ``|z| = k``)."""
+    a = np.abs(np.asarray(z, dtype=np.float64))
+    return np.sum(np.where(a <= k, 0.5 * a * a, k * a - 0.5 * k * k), axis=-1)
+
+
 @dataclass
 class ConstantVelocityPrior:
     """``v_t ~ N(damping * v_{t-1}, Sigma)``, ``x_t = x_{t-1} (+) v_t``, with Sigma from mocap.
@@ -131,6 +139,11 @@ class ConstantVelocityPrior:
     damping : float
         Factor on the previous velocity in the prediction (1 = the paper's constant-velocity
         model; below 1 damps velocities estimated from noisy poses).
+    huber : float
+        0 (default): the Gaussian penalty. Above 0: each parameter's penalty grows
+        quadratically up to ``huber`` standard deviations from the prediction and linearly
+        beyond (Huber's loss), the tails of a distribution with rare large accelerations: a
+        kick or a spin, where the Gaussian's charge for a fast change outweighs the image.
     min_velocity_std : (48,) float or float
         Floor on the per-frame velocity standard deviation, so parameters that barely move
         in the training motions keep a usable search range.
@@ -146,6 +159,7 @@ class ConstantVelocityPrior:
     accel_std: np.ndarray
     fps: float
     damping: float = 1.0
+    huber: float = 0.0
     min_velocity_std: object = 0.0
     source: dict = field(default_factory=dict)
 
@@ -243,8 +257,12 @@ class ConstantVelocityPrior:
         -------
         (N,) or () float
         """
-        return 0.5 * self.mahalanobis(pose_velocity(previous_pose, poses), predicted_velocity)
+        velocities = pose_velocity(previous_pose, poses)
+        if not self.huber:
+            return 0.5 * self.mahalanobis(velocities, predicted_velocity)
+        return huber_penalty((velocities - predicted_velocity) / self.velocity_std, self.huber)
 
     def to_dict(self) -> dict:
         return {"model": "v_t ~ N(damping v_{t-1}, Sigma), Sigma = diag(accel_std^2) / fps^4",
-                "fps": self.fps, "damping": self.damping, **self.source}
+                "fps": self.fps, "damping": self.damping,
+                **({"huber": self.huber} if self.huber else {}), **self.source}

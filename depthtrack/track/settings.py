@@ -105,6 +105,10 @@ class EnergySettings:
     ----------
     damping : float
         Velocity damping of the prediction (1 = constant velocity).
+    prior_huber : float
+        0 (default): the motion prior's Gaussian penalty. Above 0: Huber's loss at that many
+        standard deviations (:class:`~depthtrack.motion.prior.ConstantVelocityPrior`,
+        ``huber``): a change of velocity beyond it costs linearly, not quadratically.
     likelihood_weight : float
         ``w`` of the energy.
     pose_prior_std : float
@@ -121,13 +125,14 @@ class EnergySettings:
     """
 
     damping: float = 0.7
+    prior_huber: float = 0.0
     likelihood_weight: float = 1.0
     pose_prior_std: float = 1.0
     twist_std: float = 0.3
 
     def __post_init__(self):
         _positive(self, "damping", "likelihood_weight", "pose_prior_std", "twist_std",
-                  allow_zero=True)
+                  "prior_huber", allow_zero=True)
 
 
 @dataclass(frozen=True)

@@ -105,7 +105,8 @@ class Tracker:
         self.likelihood = likelihood
         self.smoothed = likelihood == "smoothed"
         self.fps = float(fps)
-        self.prior = prior or ConstantVelocityPrior.load(fps=self.fps, damping=s.energy.damping)
+        self.prior = prior or ConstantVelocityPrior.load(fps=self.fps, damping=s.energy.damping,
+                                                         huber=s.energy.prior_huber)
         if segmenter is None:
             from ..detect import segment_foreground as segmenter
         self.segmenter = segmenter
