@@ -17,12 +17,13 @@ def register(subparsers) -> None:
                     "with the GL renderer in use and the mesh size.",
         epilog="examples:\n  depthtrack bench\n  depthtrack bench --quick --json\n"
                "  depthtrack bench --mesh full --tiles 64 --batches 256 1024\n"
+               "  depthtrack bench --mesh coarse --tiles 64 --batches 16 64\n"
                "  depthtrack bench --mesh DIR/body_decimated.glb --tiles 64 --batches 16 64",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--mesh", default="decimated", metavar="MESH",
                    help="body mesh to render: decimated (default, ~1000 triangles, the "
-                        "tracker's), full (~6000), or a skinned .glb of the default skeleton "
-                        "(e.g. from tools/make_body_mesh.py --decimated 500 --out DIR)")
+                        "tracker's), coarse (~500), full (~6000), or a skinned .glb of the "
+                        "default skeleton (e.g. from tools/make_body_mesh.py --out DIR)")
     p.add_argument("--tiles", type=integer(4, 1024), nargs="+", default=None, metavar="T",
                    help="tile sizes in pixels, powers of two (default 32 64 128)")
     p.add_argument("--batches", type=integer(1, 65536), nargs="+", default=None, metavar="N",

@@ -19,9 +19,9 @@ from .frame import FrameRenderer
 from .tiles import TileRenderer
 
 TILES = (32, 64, 128)
+BATCHES = (16, 64, 256, 1024)
 #: GL_RASTERIZER_DISCARD: primitives are processed up to the rasteriser and dropped there.
 GL_RASTERIZER_DISCARD = 0x8C89
-BATCHES = (16, 64, 256, 1024)
 
 
 def mipmap_is_box_mean(size: int = 64, seed: int = 0) -> bool:
@@ -74,14 +74,15 @@ def _timed(fn, seconds: float, min_calls: int = 3, cpu: bool = False):
 
 
 def _bench_body(mesh: str):
-    """The default body with the shipped mesh ``mesh`` names, or with the skinned glTF at
-    path ``mesh`` (:class:`~depthtrack.errors.InputError` naming the file when it is not a
-    mesh of the default skeleton)."""
+    """The default body with the shipped mesh ``mesh`` names (``DEFAULT_MESH_FILES``), or
+    with the skinned glTF at path ``mesh`` (:class:`~depthtrack.errors.InputError` naming the
+    file when it is not a mesh of the default skeleton)."""
     from ..body import BodyModel
     from ..body.gltf import load_skinned_gltf
+    from ..body.model import DEFAULT_MESH_FILES
     from ..errors import InputError
 
-    if mesh in ("decimated", "full"):
+    if mesh in DEFAULT_MESH_FILES:
         return BodyModel.default(mesh=mesh)
     body = BodyModel.default()
     skinned = load_skinned_gltf(mesh).mesh
@@ -97,7 +98,7 @@ def benchmark_tiles(mesh: str = "decimated", tiles=TILES, batches=BATCHES, secon
 
     Parameters
     ----------
-    mesh : {"decimated", "full"} or path
+    mesh : {"decimated", "coarse", "full"} or path
         A shipped level of detail, or a skinned glTF of the default skeleton (e.g. one
         built by ``tools/make_body_mesh.py --decimated 500 --out DIR``: another triangle
         count).
