@@ -26,6 +26,7 @@ sys.path.insert(0, str(REPO))
 from depthtrack.contract import JOINT_INDEX  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.evaluate.metrics import trunk_twist  # noqa: E402
+from depthtrack.filters.angles import wrap  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.io.track_output import read_track  # noqa: E402
 
@@ -38,10 +39,6 @@ def line_heading(joints, left: str, right: str) -> np.ndarray:
     camera's x-z plane."""
     v = joints[:, JOINT_INDEX[right]] - joints[:, JOINT_INDEX[left]]
     return np.degrees(np.arctan2(v[:, 2], v[:, 0]))
-
-
-def wrapped(degrees):
-    return (np.asarray(degrees) + 180.0) % 360.0 - 180.0
 
 
 def main(argv=None) -> int:
@@ -62,8 +59,9 @@ def main(argv=None) -> int:
         return 2
     n = min(len(truth), len(tracked))
     truth, tracked = np.asarray(truth[:n], float), np.asarray(tracked[:n], float)
-    lag = {k: wrapped(line_heading(tracked, *lr) - line_heading(truth, *lr)) for k, lr in LINES.items()}
-    turn = wrapped(np.diff(line_heading(truth, *LINES["hips"]), prepend=np.nan))
+    lag = {k: wrap(line_heading(tracked, *lr) - line_heading(truth, *lr), 360.0)
+           for k, lr in LINES.items()}
+    turn = wrap(np.diff(line_heading(truth, *LINES["hips"]), prepend=np.nan), 360.0)
     twist_t, twist_true = trunk_twist(tracked), trunk_twist(truth)
     print("frame  true hips' turn  lag: hips shoulders ankles  twist: tracked true  (degrees)")
     for f in range(n):
