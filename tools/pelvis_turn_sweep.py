@@ -60,7 +60,7 @@ def main(argv=None) -> int:
         print(f"frame {f}: change against the tracked pose, likelihood / prior "
               f"({'Huber k = ' + str(args.huber) if args.huber else 'Gaussian'})")
         for name, kept in (("pelvis alone", pelvis.compensate + (SPINE,)), ("whole body", ())):
-            deltas = pelvis._compensated(turns, kept, x) if kept else turns
+            deltas = pelvis.compensated(turns, kept, x) if kept else turns
             candidates = body.clip(apply_velocity(x, deltas))
             likelihood = energy(candidates)
             penalty = prior.penalty(candidates, poses[f - 1], v_pred)

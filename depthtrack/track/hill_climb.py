@@ -92,15 +92,15 @@ class SearchGroup:
         if self.isolate:
             sets.append(self.compensate + self.isolate)
         for kept in sets:
-            out = np.concatenate([out, self._compensated(out[:2 * k], kept, pose)])
+            out = np.concatenate([out, self.compensated(out[:2 * k], kept, pose)])
         if self.untwist:
             twist = float(spine_twist(pose)[0])
             turns = np.zeros((len(self.untwist), dof))
             turns[:, self.params[1]] = np.asarray(self.untwist, dtype=np.float64) * twist
-            out = np.concatenate([out, self._compensated(turns, self.compensate + (SPINE,), pose)])
+            out = np.concatenate([out, self.compensated(turns, self.compensate + (SPINE,), pose)])
         return out
 
-    def _compensated(self, unit_moves, kept, pose) -> np.ndarray:
+    def compensated(self, unit_moves, kept, pose) -> np.ndarray:
         """``unit_moves (M, dof)`` (rotations of this joint) with every child in ``kept``
         given the inverse rotation, so it keeps its world rotation."""
         base = unit_moves.copy()
