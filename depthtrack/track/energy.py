@@ -134,3 +134,23 @@ def unexplained(energy, pose) -> float:
     r = energy.renderer
     fixed, empty = fixed_and_empty_costs(r.observed_tile, r.params, r.background_tile)
     return (c - fixed) / max(empty - fixed, 1e-9)
+
+
+def fixed_energy(energy) -> float:
+    """The part of ``energy``'s value that every pose pays on the observation its renderer
+    holds: ``weight`` times the tile's no-reading share (:func:`fixed_and_empty_costs`;
+    pixels of the ROI outside the image, or without a reading). A person near the image's
+    edge puts a large share of the ROI outside it (dev probe: a frontal cartwheel on SR4000,
+    36 % of a frame's energy), so a margin taken as a fraction of the whole energy asks more
+    of a candidate there than in mid-image."""
+    r = energy.renderer
+    fixed, _ = fixed_and_empty_costs(r.observed_tile, r.params, r.background_tile)
+    return float(energy.weight * fixed)
+
+
+def relative_lead(e_kept, e_new, floor: float = 0.0) -> float:
+    """How much lower ``e_new`` is than ``e_kept``, as a fraction of ``e_kept - floor``
+    (``floor``: :func:`fixed_energy`, or 0 for a fraction of the whole energy); > 0 when
+    ``e_new`` is lower. The rechecks' relative margins (limb sides, reach, reseat) compare
+    this with their margin."""
+    return (float(e_kept) - float(e_new)) / max(abs(float(e_kept) - floor), 1e-9)

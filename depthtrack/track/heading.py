@@ -35,6 +35,7 @@ import numpy as np
 from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
 from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..contract import JOINT_INDEX, JOINT_NAMES
+from .energy import relative_lead
 from .settings import TWIN_STARTS
 
 
@@ -293,7 +294,7 @@ def limb_swapped_twins(body, pose):
     return [(name, fit_joints(body, joints[order], pose)) for name, order in LIMB_SWAPS.items()]
 
 
-def recheck_limb_sides(state, pose, refit, limb_twins_of, settings):
+def recheck_limb_sides(state, pose, refit, limb_twins_of, settings, floor: float = 0.0):
     """The sides recheck of one frame: keep ``pose`` or a twin with the legs' or the arms'
     sides exchanged.
 
@@ -318,6 +319,9 @@ def recheck_limb_sides(state, pose, refit, limb_twins_of, settings):
     limb_twins_of : callable ``(pose (48,)) -> [(name, (48,)), ...]``
         :func:`limb_swapped_twins`.
     settings : TrackerSettings
+    floor : float
+        The energy every pose pays (:attr:`HeadingSettings.margins_over`); the margin is a
+        fraction of the kept energy above it.
 
     Returns
     -------
@@ -332,7 +336,7 @@ def recheck_limb_sides(state, pose, refit, limb_twins_of, settings):
     _, e_pose = refit(pose)
     fits = [(name, *refit(twin)) for name, twin in limb_twins_of(pose)]
     name, y, e_twin = min(fits, key=lambda f: float(f[2]))
-    lead = (e_pose - float(e_twin)) / max(abs(e_pose), 1e-9)
+    lead = relative_lead(e_pose, e_twin, floor)
     if lead <= settings.heading.limb_margin:
         return pose, {}, False
     swap = {"frame": state.frame, "limbs": name, "energy_kept": round(float(e_pose), 1),

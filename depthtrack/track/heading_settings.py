@@ -24,6 +24,8 @@ RETRO_TAKES = ("all", "prefix")
 RETRO_STOPS = ("any", "rank")
 #: Which heading switches their re-track takes back (:attr:`HeadingSettings.retro_revoke`).
 RETRO_REVOKES = ("never", "refused", "unsupported")
+#: What the rechecks' relative margins are fractions of (:attr:`HeadingSettings.margins_over`).
+MARGIN_BASES = ("energy", "explainable")
 #: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
 START_SCORES = ("energy", "unexplained")
 
@@ -142,6 +144,16 @@ class HeadingSettings:
     the default, one sequence lost more than 5 points at margin 0.01 and at 0.05 (90_05
     seed 3, 05_20 seed 1), the rule set before (README, "Re-seating a limb").
 
+    ``margins_over``: what ``limb_margin``, ``reseat_margin`` and
+    :attr:`~.settings.ProposalSettings.reach_margin` are fractions of (:data:`MARGIN_BASES`,
+    :func:`.energy.relative_lead`): ``"energy"``, the tracked pose's whole energy;
+    ``"explainable"``, that energy less the share every pose pays (the ROI's pixels without a
+    reading, :func:`.energy.fixed_energy`), so that a person near the image's edge, whose
+    ROI reaches out of the image, needs no larger gain than one in mid-image (dev probe: a
+    frontal cartwheel on SR4000, its right arm tracked folded at the head for 20 frames while
+    the recogniser's wrist proposal was 4 cm from the truth; the reach, climbed, scored 2.0 %
+    lower than the kept pose, 3.1 % of what was not fixed).
+
     ``retro_frames``: after a recheck turns the track (a heading switch), the frames before
     the switch were tracked facing the wrong way too, since the evidence took frames to add
     up: up to that many of them (default 50 since 2026-11-27; 0 = off) are tracked again backwards in time from the
@@ -249,9 +261,11 @@ class HeadingSettings:
     retro_give_up: int = 5
     retro_stop: str = "any"
     retro_revoke: str = "unsupported"
+    margins_over: str = "energy"
 
     def __post_init__(self):
         _one_of(self, "start_by", START_SCORES)
+        _one_of(self, "margins_over", MARGIN_BASES)
         _one_of(self, "start_twin", START_TWINS)
         _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import JOINT_INDEX
+from .energy import relative_lead
 from .heading import due, fit_joints
 from .proposals import JOINT_CLASSES, confident
 
@@ -103,7 +104,7 @@ def reach_candidates(body, pose, proposals, min_confidence: float, near: float =
     return np.array(out).reshape(-1, len(pose)), limbs
 
 
-def recheck_reach(state, pose, refit, energy_of, candidates, settings):
+def recheck_reach(state, pose, refit, energy_of, candidates, settings, floor: float = 0.0):
     """The reach recheck of one frame (module docstring): keep ``pose`` or the best limb
     re-fitted to a far proposal.
 
@@ -119,6 +120,9 @@ def recheck_reach(state, pose, refit, energy_of, candidates, settings):
     candidates : callable ``(pose (48,)) -> (poses (K, 48), limbs list of str)``
         :func:`reach_candidates` on this frame.
     settings : TrackerSettings
+    floor : float
+        The energy every pose pays (:attr:`~.heading_settings.HeadingSettings.margins_over`);
+        the margin is a fraction of the kept energy above it.
 
     Returns
     -------
@@ -136,7 +140,7 @@ def recheck_reach(state, pose, refit, energy_of, candidates, settings):
     best = int(np.argmin(energy_of(poses)))
     _, e_pose = refit(pose)
     y, e_y = refit(poses[best])
-    if float(e_y) >= (1.0 - settings.propose.reach_margin) * float(e_pose):
+    if relative_lead(e_pose, e_y, floor) <= settings.propose.reach_margin:
         return pose, {}, False
     reach = {"frame": state.frame, "limb": limbs[best], "energy_kept": round(float(e_pose), 1),
              "energy_reached": round(float(e_y), 1)}

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .energy import fixed_energy
 from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
 from .proposals import frame_proposals
@@ -37,6 +38,7 @@ def recheck_stage(tracker, state, energy, frame, x):
     s, recorder = tracker.settings, tracker.recorder
     bare = energy.without_prior().on(tracker.renderers.at_tile(s.heading.recheck_tile))
     fitted = {}                          # the tracked pose is climbed once for every recheck
+    floor = fixed_energy(bare) if s.heading.margins_over == "explainable" else 0.0
 
     def refit(pose):
         key = np.asarray(pose, dtype=np.float64).tobytes()
@@ -57,7 +59,7 @@ def recheck_stage(tracker, state, energy, frame, x):
         if turned:
             return y, changes, "heading"
         y, more, swapped = recheck_limb_sides(
-            state, x, refit, lambda pose: limb_swapped_twins(tracker.body, pose), s)
+            state, x, refit, lambda pose: limb_swapped_twins(tracker.body, pose), s, floor)
         if swapped:
             return y, {**changes, **more}, "limbs"
     if tracker.forest is not None:
@@ -65,14 +67,14 @@ def recheck_stage(tracker, state, energy, frame, x):
             y, more, reached = recheck_reach(
                 state, x, refit, bare, lambda pose: reach_candidates(
                     tracker.body, pose, frame_proposals(tracker, frame),
-                    s.propose.min_confidence), s)
+                    s.propose.min_confidence), s, floor)
         if reached:
             return y, {**changes, **more}, "reach"
     if s.heading.reseat_every:
         climb_limb = limb_climber(bare, tracker.climbers.start, recorder, s.heading.refit_level)
         with recorder.timed("reseat"):
             y, more, reseated = recheck_reseat(state, x, refit, bare, climb_limb, limb_library(),
-                                               s, clip=tracker.body.clip)
+                                               s, clip=tracker.body.clip, floor=floor)
         if reseated:
             return y, {**changes, **more}, "reseat"
     if not due(state, s.heading.search_every):

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..body.skeleton import POSE_INDEX
+from .energy import relative_lead
 from .heading import due
 from .hill_climb import restrict_blocks
 from .reach import LIMBS
@@ -106,7 +107,8 @@ def best_reseat(pose, energy, climb_limb, library, climbs: int = 1, clip=None):
     return best
 
 
-def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, clip=None):
+def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, clip=None,
+                   floor: float = 0.0):
     """The re-seat recheck of one frame: keep ``pose`` or one with a limb re-seated.
 
     Parameters
@@ -124,6 +126,9 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     library : dict
         :func:`limb_library`.
     settings : TrackerSettings
+    floor : float
+        The energy every pose pays (:attr:`~.heading_settings.HeadingSettings.margins_over`);
+        the margin is a fraction of the kept energy above it.
 
     Returns
     -------
@@ -138,7 +143,7 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
         return pose, {}, False
     base, e_pose = refit(pose)           # the limbs are re-seated on the climbed pose
     name, y, e_y = best_reseat(base, energy, climb_limb, library, h.reseat_climbs, clip)
-    lead = (e_pose - e_y) / max(abs(e_pose), 1e-9)
+    lead = relative_lead(e_pose, e_y, floor)
     if lead <= h.reseat_margin:
         return pose, {}, False
     event = {"frame": state.frame, "limb": name, "energy_kept": round(float(e_pose), 1),
