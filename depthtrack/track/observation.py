@@ -72,26 +72,7 @@ def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
     return big[labels]
 
 
-def update_scene(scene, depth, near) -> np.ndarray:
-    """The scene's depth after a frame: ``(H, W) float32``, 0 where never seen.
-
-    Readings outside ``near`` (``(H, W) bool``: the dilated mask and predicted silhouette,
-    where the person may be) are taken for the scene where they are farther than what
-    ``scene`` (``(H, W)`` or None = nothing seen yet) holds: the scene is the farthest surface
-    seen at a pixel, and anything in front of it passes. So a frame whose segmentation
-    missed the person (dev probe: a frontal cartwheel, one frame's mask 105 pixels of a
-    1,300-pixel body) does not write the body into a wall already seen; as the person moves,
-    the wall next to them is seen in one frame and known in the next.
-    """
-    depth = np.asarray(depth, dtype=np.float32)
-    out = np.zeros(depth.shape, np.float32) if scene is None else np.array(scene, np.float32)
-    seen = (depth > 0) & ~np.asarray(near, bool)
-    out[seen] = np.maximum(out[seen], depth[seen])
-    return out
-
-
-def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=None,
-                      scene=None, scene_tolerance: float = 0.1):
+def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=None):
     """The depth image the likelihood compares against: person pixels raw, background marked.
 
     Parameters
@@ -109,10 +90,6 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
         (:func:`depthtrack.detect.segment.inlier_distance`) of it, or below it, are background.
     z_range : (near, far) or None
         The person's depth band; readings outside it are background.
-    scene : (H, W) float or None
-        The scene's depth where known (:func:`update_scene`; 0 = unknown): readings outside
-        ``mask`` within ``scene_tolerance`` (m) of it are background, so the scene next to the
-        person is not left for a limb to explain.
 
     Returns
     -------
@@ -135,9 +112,6 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
         background |= height < inlier_distance(depth)
     if near is not None:
         background |= ~np.asarray(near, bool)
-    if scene is not None:
-        scene = np.asarray(scene, dtype=np.float64)
-        background |= (scene > 0) & (np.abs(depth - scene) < scene_tolerance)
     background &= reading & ~np.asarray(mask, bool)
     background |= out_of_range(depth, mask)
     out = np.where(background, BACKGROUND, np.where(reading, depth, NO_READING))

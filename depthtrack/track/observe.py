@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from ..errors import InputError
-from .observation import observation_image, square_roi, update_scene, visible_area
+from .observation import observation_image, square_roi, visible_area
 
 
 @dataclass
@@ -61,7 +61,7 @@ def person_present(foreground, camera, settings) -> bool:
 
 
 def observe(depth, foreground, camera, settings, roi=None, floor=None, predicted_joints=None,
-            predicted_silhouette=None, scene=None):
+            predicted_silhouette=None):
     """The observation of one frame.
 
     The observation keeps the raw depth of every pixel that may be the person, so a
@@ -83,17 +83,12 @@ def observe(depth, foreground, camera, settings, roi=None, floor=None, predicted
     predicted_joints : (J, 3) float or None
     predicted_silhouette : (H, W) bool or None
         Where the predicted pose covers the image.
-    scene : (H, W) float32 or None
-        The scene's depth seen so far (:func:`~.observation.update_scene`), with
-        :attr:`~.settings.ObserveSettings.scene_memory`.
 
     Returns
     -------
     frame : Frame
     floor : (4,) float or None
         The floor plane now known.
-    scene : (H, W) float32 or None
-        The scene's depth after this frame (None without ``scene_memory``).
     """
     s = settings.observe
     mask = np.asarray(foreground.mask, dtype=bool)
@@ -130,9 +125,6 @@ def observe(depth, foreground, camera, settings, roi=None, floor=None, predicted
         near |= predicted_silhouette
     k = int(s.near_dilation)
     near = cv2.dilate(near.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
-    known = scene if s.scene_memory else None
-    observed = observation_image(depth, mask, camera, floor, z_range, near, known, s.scene_tolerance)
-    if s.scene_memory:
-        scene = update_scene(scene, depth, near)
+    observed = observation_image(depth, mask, camera, floor, z_range, near)
     weight = settings.energy.likelihood_weight * new_roi[2] * new_roi[2]
-    return Frame(depth, foreground, observed, new_roi, weight), floor, (scene if s.scene_memory else None)
+    return Frame(depth, foreground, observed, new_roi, weight), floor

@@ -71,17 +71,6 @@ class ObserveSettings:
         During tracking the track is dropped after this many such frames in a row (a
         segmentation that fails for a frame or two must not end a good track); those frames
         get no pose and tracking starts afresh on the next frame with a person.
-    scene_memory : bool
-        Remember the scene: readings away from the person (outside the dilated mask and
-        predicted silhouette) are kept as the scene's depth at their pixels, and a later
-        reading outside the mask within ``scene_tolerance`` (m) of it is background
-        (:func:`~.observation.update_scene`). Without it the wall just behind a person,
-        inside the region where the person may be, counts as readings to explain, and a limb
-        moved onto the wall explains them (dev probe: a frontal cartwheel on SR4000, the
-        right arm tracked at the wall's depth behind the head for 20 frames). For a fixed
-        camera.
-    scene_tolerance : float
-        See ``scene_memory``.
     """
 
     tile: int = 64
@@ -93,16 +82,12 @@ class ObserveSettings:
     near_dilation: int = 7
     min_person_area: float = 0.08
     absent_frames: int = 3
-    scene_memory: bool = False
-    scene_tolerance: float = 0.1
 
     def __post_init__(self):
         _power_of_two(self.tile, "tile")
         _one_of(self, "render_mesh", RENDER_MESHES)
         _positive(self, "roi_margin", "predicted_margin", "depth_band", "min_person_area",
-                  "scene_tolerance", allow_zero=True)
-        _check(isinstance(self.scene_memory, bool), f"scene_memory must be true or false, "
-                                                    f"not {self.scene_memory!r}")
+                  allow_zero=True)
         _check(int(self.absent_frames) >= 1,
                f"absent_frames must be at least 1, not {self.absent_frames}")
         _check(self.near_dilation >= 1, f"near_dilation must be >= 1, not {self.near_dilation}")

@@ -26,9 +26,6 @@ class TrackingState:
         Last region of interest (kept when a frame's foreground is empty).
     floor : (4,) float or None
         Last floor plane the segmentation found.
-    scene : (H, W) float32 or None
-        The scene's depth behind the person where it has been seen, 0 where not yet
-        (:attr:`~.settings.ObserveSettings.scene_memory`; None when off or before a frame).
     absent : int
         Frames in a row without a person while tracking.
     frames_without_person : int
@@ -75,7 +72,6 @@ class TrackingState:
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(48))
     roi: tuple | None = None
     floor: np.ndarray | None = None
-    scene: np.ndarray | None = None
     absent: int = 0
     frames_without_person: int = 0
     log: tuple = ()

@@ -174,11 +174,11 @@ class Tracker:
         if predicted is not None:
             joints = np.asarray(self.body.joint_positions(predicted))
             silhouette = self.renderers.silhouette(predicted)
-        frame, floor, scene = observe(depth, foreground, self.camera, self.settings, roi=state.roi,
-                                      floor=state.floor, predicted_joints=joints,
-                                      predicted_silhouette=silhouette, scene=state.scene)
+        frame, floor = observe(depth, foreground, self.camera, self.settings, roi=state.roi,
+                               floor=state.floor, predicted_joints=joints,
+                               predicted_silhouette=silhouette)
         self.renderers.upload(frame)
-        return frame, state.replace(roi=frame.roi, floor=floor, scene=scene)
+        return frame, state.replace(roi=frame.roi, floor=floor)
 
     def _energy(self, frame) -> Energy:
         """The energy of ``frame`` (uploaded) without the motion prior, on the coarse tiles."""
