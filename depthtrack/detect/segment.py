@@ -393,20 +393,16 @@ def segment_foreground(depth, camera, floor: bool = True, up=(0.0, -1.0, 0.0), m
 
     walls = []
     labels, sizes, members, person, background = pick(valid, walls)
-    if walls:
+    if person is None and walls:
         # A person close to a wall can join it through flying or noisy pixels and vanish in
-        # the "wall" surface -- wholly, or all but a fragment that is then taken for the
-        # person (dev probe: a frontal cartwheel 0.45 m before the wall on SR4000, one frame's
-        # person a 105-pixel piece of a 1,200-pixel body, the rest inside the wall's surface).
-        # Where more of the walls' surfaces stands off their planes than the person found
-        # has, drop the planes' inliers and look again: what stands off them separates.
+        # the "wall" surface. Drop the walls' plane inliers and look again: what stands off
+        # the planes separates from them.
         planes = np.asarray(walls, dtype=np.float64)
         on_wall = np.isin(labels, list(background)) & valid
         dist = np.abs(cloud[on_wall] @ planes[:, :3].T + planes[:, 3]).min(axis=1)
         inlier = np.zeros(z.shape, dtype=bool)
         inlier[on_wall] = dist < inlier_distance(z[on_wall])
-        off_wall = int((on_wall & ~inlier).sum())
-        if off_wall >= min_pixels and (person is None or off_wall > sizes[person]):
+        if (on_wall & ~inlier).sum() >= min_pixels:
             valid = valid & ~inlier
             labels, sizes, members, person, background = pick(valid, walls)
     mask = np.zeros(z.shape, dtype=bool)
