@@ -189,7 +189,7 @@ def test_untwist_moves_bring_back_a_pelvis_left_behind_the_chest():
         pelvis = default_blocks()[1][0]
         behind = np.zeros((1, 48))
         behind[0, 4] = -0.8                    # the pelvis alone turned back, chest kept
-        start = apply_velocity(truth, pelvis._compensated(behind, pelvis.compensate + (SPINE,),
+        start = apply_velocity(truth, pelvis.compensated(behind, pelvis.compensate + (SPINE,),
                                                           truth))[0]
         assert np.degrees(spine_twist(start)[0]) > 40
         hips = [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
