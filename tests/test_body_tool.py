@@ -19,12 +19,14 @@ def test_tool_builds_closed_skinned_meshes(tmp_path):
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
     results = tool.build(voxel=0.015, full_faces=3000, decimated_faces=800, smooth_iterations=5,
-                         out_dir=tmp_path)
+                         out_dir=tmp_path, coarse_faces=400)
+    wanted = {"full": 3000, "decimated": 800, "coarse": 400}
+    assert set(results) == set(wanted)
     for label, (path, n_vertices, n_faces, size) in results.items():
         body = BodyModel.from_gltf(path)
         m = trimesh.Trimesh(body.mesh.vertices, body.faces, process=False)
         assert m.is_watertight and m.volume > 0
-        assert abs(n_faces - (3000 if label == "full" else 800)) < 20
+        assert abs(n_faces - wanted[label]) < 20
         np.testing.assert_allclose(body.mesh.weights.sum(1), 1.0, atol=1e-6)
         # the tool scales the full mesh to exactly 1.75 m and both levels share its skeleton
         assert abs(np.ptp(body.mesh.vertices[:, 1]) - 1.75) < (1e-4 if label == "full" else 0.02)
