@@ -126,13 +126,19 @@ class Energy:
         return float(self(np.asarray(pose)[None])[0])
 
 
+def _bounds(energy):
+    """``(fixed, empty)`` mean tile costs of the observation ``energy``'s renderer holds
+    (:func:`fixed_and_empty_costs`)."""
+    r = energy.renderer
+    return fixed_and_empty_costs(r.observed_tile, r.params, r.background_tile)
+
+
 def unexplained(energy, pose) -> float:
     """Share of the observation's cost that ``pose (48,)`` leaves unexplained, against the
     observation held by ``energy``'s renderer: ``(c(x) - c_fixed) / (c_empty - c_fixed)``
     (:mod:`.judge`; about 0.1 - 0.3 on a good fit, near 1 when lost)."""
     c = float(energy.likelihood_costs(np.asarray(pose)[None])[0])
-    r = energy.renderer
-    fixed, empty = fixed_and_empty_costs(r.observed_tile, r.params, r.background_tile)
+    fixed, empty = _bounds(energy)
     return (c - fixed) / max(empty - fixed, 1e-9)
 
 
@@ -143,8 +149,7 @@ def fixed_energy(energy) -> float:
     edge puts a large share of the ROI outside it (dev probe: a frontal cartwheel on SR4000,
     36 % of a frame's energy), so a margin taken as a fraction of the whole energy asks more
     of a candidate there than in mid-image."""
-    r = energy.renderer
-    fixed, _ = fixed_and_empty_costs(r.observed_tile, r.params, r.background_tile)
+    fixed, _ = _bounds(energy)
     return float(energy.weight * fixed)
 
 
