@@ -29,8 +29,9 @@ demo: $(STAMP)
 
 # -n auto: one pytest worker per core (pytest-xdist), whole files to each, so a file's
 # module fixtures are made once: the suite is mostly single-threaded tracking on llvmpipe.
+# --no-loadscope-reorder keeps tests/conftest.py's order, the slowest files first.
 test: $(STAMP)
-	$(PY) -m pytest -q -n auto --dist loadfile
+	$(PY) -m pytest -q -n auto --dist loadfile --no-loadscope-reorder
 
 bench: $(STAMP)
 	$(VENV)/bin/depthtrack bench

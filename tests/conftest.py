@@ -7,6 +7,26 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPO.parent / "shared" / "data"
 
+#: Seconds the slowest test files took on a 2-core CI machine (``pytest --durations=0``,
+#: summed per file; 2026-11), longest first. ``make test`` runs whole files per worker
+#: (``--dist loadfile``) in collection order (``--no-loadscope-reorder``): xdist's own
+#: order, by number of tests, left the one- and two-test tracker files, 80 s each, to the
+#: very end, one worker running them while the other idled. Longest first, the last files
+#: to start are short and both workers finish together. Files not named here run after
+#: these in their usual order; a stale figure only costs balance, never a test.
+SLOW_FILES = {
+    "test_track_recovery.py": 290, "test_track_start_waits.py": 160,
+    "test_track_shape_fit.py": 137, "test_track_tracker.py": 130, "test_track_facing.py": 119,
+    "test_track_bends.py": 109, "test_track_proposals.py": 87, "test_track_reference.py": 83,
+    "test_track_revoke.py": 82, "test_track_stream_gl.py": 74, "test_batch.py": 67,
+    "test_track_retrack.py": 37, "test_kill.py": 29, "test_demo.py": 23,
+}
+
+
+def pytest_collection_modifyitems(items):
+    """The slowest files first (a stable sort: each file's tests stay together, in order)."""
+    items.sort(key=lambda item: -SLOW_FILES.get(item.path.name, 0))
+
 
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
