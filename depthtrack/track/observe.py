@@ -119,7 +119,8 @@ def observe(depth, foreground, camera, settings, roi=None, floor=None, predicted
     z_range = None
     if bounds:
         bounds = np.array(bounds)
-        z_range = (float(bounds[:, 0].min()) - s.depth_band, float(bounds[:, 1].max()) + s.depth_band)
+        far = s.depth_band if s.far_band is None else float(s.far_band)
+        z_range = (float(bounds[:, 0].min()) - s.depth_band, float(bounds[:, 1].max()) + far)
     near = mask.copy()
     if predicted_silhouette is not None:
         near |= predicted_silhouette

@@ -60,6 +60,13 @@ class ObserveSettings:
         Margin (m at the joints' median depth) around the predicted joints that the ROI covers.
     depth_band : float
         Readings farther than this (m) in front of or behind the person count as background.
+    far_band : float or None
+        Behind the person, this margin (m) instead of ``depth_band`` (None: ``depth_band``).
+        Readings kept inside the band and near the person are what the model must explain,
+        so a wall closer behind the person than the band lets a misplaced limb explain the
+        wall (a leg folded back onto it, an arm laid on it: dev probe, a frontal cartwheel on
+        SR4000 with the wall 0.3 - 0.4 m behind). The near side's margin stays
+        ``depth_band``: an arm reaching toward the camera that the segmentation misses.
     depth_percentiles : (float, float)
         Percentiles of the foreground depth that bound the person's depth band.
     near_dilation : int
@@ -78,6 +85,7 @@ class ObserveSettings:
     roi_margin: float = 0.15
     predicted_margin: float = 0.15
     depth_band: float = 0.4
+    far_band: float | None = None
     depth_percentiles: tuple = (2.0, 98.0)
     near_dilation: int = 7
     min_person_area: float = 0.08
@@ -91,6 +99,8 @@ class ObserveSettings:
         _check(int(self.absent_frames) >= 1,
                f"absent_frames must be at least 1, not {self.absent_frames}")
         _check(self.near_dilation >= 1, f"near_dilation must be >= 1, not {self.near_dilation}")
+        _check(self.far_band is None or float(self.far_band) >= 0,
+               f"far_band must be None or >= 0, not {self.far_band}")
         object.__setattr__(self, "depth_percentiles", tuple(float(p) for p in self.depth_percentiles))
         lo, hi = self.depth_percentiles
         _check(0 <= lo < hi <= 100, f"depth_percentiles must be 0 <= lo < hi <= 100, not "
