@@ -287,3 +287,31 @@ def test_the_coarse_render_mesh_scores_with_half_the_triangles_and_tracks(scene)
         assert coarse.renderers.coarse.body is coarse.render_body
         out = [coarse.init(frames[0], pose=truth[0])] + [coarse.step(d) for d in frames[1:4]]
     assert (_errors(body, out, truth[:4]) < 0.10).mean() > 0.95
+
+
+def test_the_far_band_makes_a_wall_close_behind_the_person_background():
+    """``observe.far_band``: readings of a wall 0.35 m behind the person, beside it (inside
+    the dilated mask), are part of the observation with the default band (0.4 m both ways)
+    and background with a far band of 0.2 m; an arm 0.3 m in front of the person that the
+    segmentation missed stays a reading either way (the near side keeps ``depth_band``)."""
+    from depthtrack.camera import Camera
+    from depthtrack.detect.segment import Foreground
+    from depthtrack.track import TrackerSettings
+    from depthtrack.track.observe import observe
+
+    camera = Camera.preset("sr4000")
+    depth = np.full(camera.shape, 4.85, np.float32)           # the wall
+    mask = np.zeros(camera.shape, bool)
+    mask[40:110, 60:90] = True
+    depth[40:110, 60:90] = 4.4 + 0.1 * np.linspace(0, 1, 30)[None, :]   # the person, 4.4 - 4.5 m
+    depth[70:73, 90:93] = 4.1                                 # a missed hand, in front
+    fg = Foreground(mask, np.zeros((0, 3)), np.zeros((0, 2), int))
+    wall = (slice(40, 110), slice(57, 60))     # beside the person, inside the dilated mask
+    for far, wall_kept in ((None, True), (0.2, False)):
+        s = TrackerSettings().updated({"observe": {"far_band": far}})
+        frame, _ = observe(depth, fg, camera, s)
+        assert np.isfinite(frame.observed[wall]).all() == wall_kept
+        assert np.isinf(frame.observed[wall]).all() != wall_kept
+        assert (frame.observed[70:73, 90:93] == np.float32(4.1)).all()
+        assert (frame.observed[mask] == depth[mask]).all()
+        assert np.isinf(frame.observed[:, :40]).all()          # far from the person
