@@ -55,12 +55,16 @@ class Foreground:
     floor_plane : (4,) float or None
         ``(nx, ny, nz, d)`` with unit normal ``n`` pointing up (toward the person):
         ``n . p + d`` is the height of point ``p`` above the floor. None when no floor was found.
+    wall_planes : (K, 4) float or None
+        The planes of the surfaces dropped as walls (unit normal, offset), those larger than
+        the person; None when there were none.
     """
 
     mask: np.ndarray
     points: np.ndarray
     pixels: np.ndarray
     floor_plane: np.ndarray | None = None
+    wall_planes: np.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -428,4 +432,5 @@ def segment_foreground(depth, camera, floor: bool = True, up=(0.0, -1.0, 0.0), m
         mask = np.isin(labels, keep) & valid
     rows, cols = np.nonzero(mask)
     return Foreground(mask=mask, points=cloud[rows, cols], pixels=np.stack([cols, rows], axis=1),
-                      floor_plane=plane)
+                      floor_plane=plane,
+                      wall_planes=np.asarray(walls, dtype=np.float64) if walls else None)

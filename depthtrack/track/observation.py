@@ -72,7 +72,8 @@ def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
     return big[labels]
 
 
-def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=None):
+def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=None,
+                      wall_planes=None):
     """The depth image the likelihood compares against: person pixels raw, background marked.
 
     Parameters
@@ -90,6 +91,9 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
         (:func:`depthtrack.detect.segment.inlier_distance`) of it, or below it, are background.
     z_range : (near, far) or None
         The person's depth band; readings outside it are background.
+    wall_planes : (K, 4) float or None
+        Planes of the walls the segmentation dropped; readings within its inlier distance of
+        one are background, as on the floor.
 
     Returns
     -------
@@ -103,13 +107,19 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
     background = np.zeros(depth.shape, bool)
     if z_range is not None:
         background |= (depth < z_range[0]) | (depth > z_range[1])
-    if floor_plane is not None:
+    if floor_plane is not None or (wall_planes is not None and len(wall_planes)):
         from ..detect.segment import inlier_distance
 
-        plane = np.asarray(floor_plane, dtype=np.float64)
         pts = camera.backproject(depth)
-        height = (pts @ plane[:3] + plane[3]) / np.linalg.norm(plane[:3])
-        background |= height < inlier_distance(depth)
+        tolerance = inlier_distance(depth)
+        if floor_plane is not None:
+            plane = np.asarray(floor_plane, dtype=np.float64)
+            height = (pts @ plane[:3] + plane[3]) / np.linalg.norm(plane[:3])
+            background |= height < tolerance
+        if wall_planes is not None and len(wall_planes):
+            planes = np.asarray(wall_planes, dtype=np.float64).reshape(-1, 4)
+            off = np.abs(pts @ planes[:, :3].T + planes[:, 3]) / np.linalg.norm(planes[:, :3], axis=1)
+            background |= off.min(axis=-1) < tolerance
     if near is not None:
         background |= ~np.asarray(near, bool)
     background &= reading & ~np.asarray(mask, bool)

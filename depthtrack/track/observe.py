@@ -126,6 +126,7 @@ def observe(depth, foreground, camera, settings, roi=None, floor=None, predicted
         near |= predicted_silhouette
     k = int(s.near_dilation)
     near = cv2.dilate(near.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
-    observed = observation_image(depth, mask, camera, floor, z_range, near)
+    walls = getattr(foreground, "wall_planes", None) if s.wall_background else None
+    observed = observation_image(depth, mask, camera, floor, z_range, near, walls)
     weight = settings.energy.likelihood_weight * new_roi[2] * new_roi[2]
     return Frame(depth, foreground, observed, new_roi, weight), floor

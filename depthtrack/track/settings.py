@@ -69,6 +69,12 @@ class ObserveSettings:
         ``depth_band``: an arm reaching toward the camera that the segmentation misses.
     depth_percentiles : (float, float)
         Percentiles of the foreground depth that bound the person's depth band.
+    wall_background : bool
+        Readings on the plane of a wall the segmentation dropped (``Foreground.wall_planes``,
+        within its inlier distance) are background, as on the floor, also inside the depth
+        band and near the person. Off (the default): a wall closer behind the person than
+        ``depth_band`` is part of the observation near the person, and a misplaced limb can
+        explain it (dev probe: a frontal cartwheel on SR4000 with the wall 0.3 - 0.4 m behind).
     near_dilation : int
         Side (pixels) of the square that dilates the mask and the predicted silhouette into
         the region where readings may belong to the person.
@@ -87,6 +93,7 @@ class ObserveSettings:
     depth_band: float = 0.4
     far_band: float | None = None
     depth_percentiles: tuple = (2.0, 98.0)
+    wall_background: bool = False
     near_dilation: int = 7
     min_person_area: float = 0.08
     absent_frames: int = 3
@@ -99,6 +106,8 @@ class ObserveSettings:
         _check(int(self.absent_frames) >= 1,
                f"absent_frames must be at least 1, not {self.absent_frames}")
         _check(self.near_dilation >= 1, f"near_dilation must be >= 1, not {self.near_dilation}")
+        _check(isinstance(self.wall_background, bool),
+               f"wall_background must be true or false, not {self.wall_background!r}")
         _check(self.far_band is None or float(self.far_band) >= 0,
                f"far_band must be None or >= 0, not {self.far_band}")
         object.__setattr__(self, "depth_percentiles", tuple(float(p) for p in self.depth_percentiles))
