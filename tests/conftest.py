@@ -45,3 +45,33 @@ def squat(tmp_path_factory):
     d = tmp_path_factory.mktemp("squat") / "seq"
     synthesize_procedural("squat", d, start=0.6, seconds=0.6, seed=3)
     return open_sequence(d)
+
+
+class FirstFrames:
+    """The first ``n`` frames of a sequence: what a tracker and a test read of one (``len``,
+    ``depth(i)``, ``joints``, ``camera``, ``fps``), the frames themselves unchanged."""
+
+    def __init__(self, seq, n: int):
+        if not 0 < n <= len(seq):
+            raise ValueError(f"{n} frames of a sequence of {len(seq)}")
+        self.seq, self.n = seq, int(n)
+        self.camera, self.fps = seq.camera, seq.fps
+
+    def __len__(self) -> int:
+        return self.n
+
+    def depth(self, i: int):
+        if not 0 <= i < self.n:
+            raise IndexError(f"frame {i} of {self.n}")
+        return self.seq.depth(i)
+
+    @property
+    def joints(self):
+        return self.seq.joints[:self.n]
+
+
+@pytest.fixture(scope="module")
+def squat12(squat):
+    """The squat's first 12 frames: enough for the tests whose corrections land by frame 8
+    or 10 (the rechecks every 4 frames; the flip search every 5), a fifth less tracking."""
+    return FirstFrames(squat, 12)

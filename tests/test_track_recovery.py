@@ -194,7 +194,8 @@ def test_small_steady_leads_add_up_and_mixed_ones_cancel():
         state = state.replace(**changes)
 
 
-def test_a_mirrored_start_is_corrected_while_tracking(squat):
+def test_a_mirrored_start_is_corrected_while_tracking(squat12):
+    squat = squat12                 # the corrections land by frame 10
     body = BodyModel.default(height=1.75)
     truth = squat.joints
     x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
@@ -272,7 +273,8 @@ def test_the_sides_recheck_takes_a_twin_only_on_a_clear_lead():
     assert not switched and changes == {}
 
 
-def test_a_start_with_the_legs_crossed_is_uncrossed_while_tracking(squat):
+def test_a_start_with_the_legs_crossed_is_uncrossed_while_tracking(squat12):
+    squat = squat12                 # the corrections land by frame 10
     body = BodyModel.default(height=1.75)
     truth = squat.joints
     x_true = fit_pose_to_joints(body, truth[0])
@@ -329,8 +331,9 @@ def test_flip_search_asks_for_the_other_heading_and_switches_on_a_clear_lead_onl
     assert changes["heading_switches"][-1]["frame"] == 7
 
 
-def test_a_mirrored_start_is_corrected_by_the_flip_search(squat):
+def test_a_mirrored_start_is_corrected_by_the_flip_search(squat12):
     """With the twin recheck off, the periodic flip search alone turns a mirrored track."""
+    squat = squat12                 # the corrections land by frame 10
     body = BodyModel.default(height=1.75)
     truth = squat.joints
     x0 = turned_pose(fit_pose_to_joints(body, truth[0]))

@@ -22,17 +22,17 @@ def test_a_switch_is_taken_back_by_the_rule_asked_for():
 
 def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
     """With retro_revoke "refused", a heading switch to the wrong heading -- the swapped
-    twin, climbed, injected on frame 8 of a track that faces the right way, the judge's
+    twin, climbed, injected on frame 4 of a track that faces the right way, the judge's
     recovery off so that only the re-track can answer it -- is re-tracked, the backward
     track scores worse from its first frame, and the switch is taken back: no frame back to
-    front. Without it frame 8 is back to front (the recheck would turn the track again four
-    frames later; ten frames are tracked)."""
+    front. Without it frame 4 is back to front (the recheck would turn the track again four
+    frames later; six frames are tracked)."""
     import depthtrack.track.rechecks as rechecks
     from depthtrack.body.facing import back_to_front
 
     body = BodyModel.default(height=1.75)
     x0 = fit_pose_to_joints(body, squat.joints[0])
-    wrong_on = 8
+    wrong_on = 4                         # the recheck's first turn (every 4)
     real = rechecks.recheck_heading
 
     def switching_on_one_frame(state, pose, refit, twins, pixels, settings, judge=None):
@@ -49,7 +49,7 @@ def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkey
                                       "judge": {"lost_ratio": 100.0},
                                       "propose": {"lost_frames": 1000}})
     runs = {}
-    frames = 10                          # the switch on 8, the recheck's next turn on 12
+    frames = 6                           # the switch on 4, the recheck's next turn on 8
     for revoke in ("never", "refused"):
         settings = base.updated({"heading": {"retro_revoke": revoke}})
         with Tracker(body, squat.camera, settings=settings) as tracker:

@@ -3,6 +3,7 @@ it backwards, and the rechecks' climbs (issue 10), on short synthetic ToF sequen
 test_track_recovery.py so that the two CI workers (``--dist loadfile``) share the long tracks."""
 import numpy as np
 import pytest
+from conftest import FirstFrames
 
 from depthtrack.body import BodyModel
 from depthtrack.track import TrackerSettings
@@ -19,7 +20,8 @@ def _errors(joints, truth):
 def test_a_start_waits_for_the_whole_person_and_tracks_the_frames_before_backwards(squat):
     """The first three frames show only the upper body (the rest out of view): with
     ``complete_fraction`` the start waits for the whole person and the frames before it are
-    tracked backwards from there."""
+    tracked backwards from there (ten frames: the start on frame 3, seven tracked on)."""
+    squat = FirstFrames(squat, 10)
     body = BodyModel.default(height=1.75)
     truth = squat.joints
     depths = [squat.depth(i).copy() for i in range(len(squat))]
@@ -46,12 +48,12 @@ def test_a_start_waits_for_the_whole_person_and_tracks_the_frames_before_backwar
     assert err[3:].max() < 0.1                    # the start on the whole person holds
     # the backward track reached frame 0 (its frames are the last three tracked, in reverse)
     assert _errors(joints[2:3], truth[2:3])[0] < 1.0 and np.isfinite(joints[:3]).all()
-    # off: the start is on frame 0, the upper body alone (five frames show it)
+    # off: the start is on frame 0, the upper body alone (three frames show it)
     with Tracker(body, c, fps=squat.fps,
                  settings=TrackerSettings(start={"complete_fraction": 0.0})) as tracker:
-        poses_off = dict(tracker.stream(depths[:5]))
+        poses_off = dict(tracker.stream(depths[:3]))
         assert "deferred_frames" not in tracker.state.init_info
-    assert sorted(poses_off) == list(range(5))
+    assert sorted(poses_off) == list(range(3))
     with pytest.raises(ValueError, match="complete_fraction"):
         TrackerSettings(start={"complete_fraction": 1.5})
 
