@@ -315,3 +315,31 @@ def test_the_far_band_makes_a_wall_close_behind_the_person_background():
         assert (frame.observed[70:73, 90:93] == np.float32(4.1)).all()
         assert (frame.observed[mask] == depth[mask]).all()
         assert np.isinf(frame.observed[:, :40]).all()          # far from the person
+
+
+def test_wall_background_makes_the_segmented_walls_plane_background():
+    """``observe.wall_background``: the segmentation gives the planes of the walls it dropped
+    (``Foreground.wall_planes``); with the option on, readings on such a plane beside the
+    person are background even inside the depth band, while the person and a hand in front
+    stay readings. A synthetic frame: a fronto-parallel wall at 4.85 m, a person at 4.4 - 4.5 m
+    (the default band reaches 4.9 m)."""
+    from depthtrack.camera import Camera
+    from depthtrack.detect import segment_foreground
+    from depthtrack.track import TrackerSettings
+    from depthtrack.track.observe import observe
+
+    camera = Camera.preset("sr4000")
+    depth = np.full(camera.shape, 4.85, np.float32)
+    depth[30:120, 60:95] = 4.4 + 0.1 * np.linspace(0, 1, 35)[None, :]   # the person, 4.4 - 4.5 m
+    fg = segment_foreground(depth, camera, floor=False)
+    assert fg.mask[30:120, 60:95].all() and fg.mask.sum() == 90 * 35
+    walls = fg.wall_planes
+    assert walls is not None and walls.shape == (1, 4)
+    normal, offset = walls[0, :3] * np.sign(walls[0, 2]), walls[0, 3] * np.sign(walls[0, 2])
+    assert normal @ [0.0, 0.0, 1.0] > 0.999 and offset == pytest.approx(-4.85, abs=0.01)
+    beside = (slice(30, 120), slice(57, 60))                      # inside the dilated mask
+    for on in (False, True):
+        s = TrackerSettings().updated({"observe": {"wall_background": on}})
+        frame, _ = observe(depth, fg, camera, s)
+        assert np.isinf(frame.observed[beside]).all() == on
+        assert (frame.observed[fg.mask] == depth[fg.mask]).all()
