@@ -26,6 +26,7 @@ from depthtrack.detect.segment import inlier_distance  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.observation import on_planes  # noqa: E402
 
 
 def wall_readings(depth, camera, joints=None, near: int = 21, extra: float = 0.1,
@@ -54,11 +55,9 @@ def wall_readings(depth, camera, joints=None, near: int = 21, extra: float = 0.1
     lo, hi = np.percentile(z, [2.0, 98.0])
     if joints is not None and np.isfinite(joints).any():
         hi = max(hi, float(np.nanmax(joints[:, 2])))
-    pts = camera.backproject(depth)
-    planes = fg.wall_planes
-    off = np.abs(pts @ planes[:, :3].T + planes[:, 3]).min(axis=-1)
+    wall = on_planes(camera.backproject(depth), fg.wall_planes, inlier_distance(depth))
     close = cv2.dilate(fg.mask.astype(np.uint8), np.ones((near, near), np.uint8)) > 0
-    return ((depth > 0) & (off < inlier_distance(depth)) & ~fg.mask & close
+    return ((depth > 0) & wall & ~fg.mask & close
             & (depth >= lo - depth_band) & (depth <= hi + depth_band + extra))
 
 

@@ -72,6 +72,27 @@ def out_of_range(depth, mask, clearance: int = 2, min_area: float = 0.005):
     return big[labels]
 
 
+def on_planes(points, planes, tolerance) -> np.ndarray:
+    """Whether each point lies within ``tolerance`` of any of the planes.
+
+    Parameters
+    ----------
+    points : (..., 3) float
+    planes : (K, 4) float
+        ``n . p + d = 0`` (``n`` need not be a unit vector).
+    tolerance : (...) float or float
+        Metres.
+
+    Returns
+    -------
+    (...) bool
+    """
+    planes = np.asarray(planes, dtype=np.float64).reshape(-1, 4)
+    off = np.abs(np.asarray(points) @ planes[:, :3].T + planes[:, 3])
+    off /= np.linalg.norm(planes[:, :3], axis=1)
+    return off.min(axis=-1) < tolerance
+
+
 def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=None,
                       wall_planes=None):
     """The depth image the likelihood compares against: person pixels raw, background marked.
@@ -117,9 +138,7 @@ def observation_image(depth, mask, camera, floor_plane=None, z_range=None, near=
             height = (pts @ plane[:3] + plane[3]) / np.linalg.norm(plane[:3])
             background |= height < tolerance
         if wall_planes is not None and len(wall_planes):
-            planes = np.asarray(wall_planes, dtype=np.float64).reshape(-1, 4)
-            off = np.abs(pts @ planes[:, :3].T + planes[:, 3]) / np.linalg.norm(planes[:, :3], axis=1)
-            background |= off.min(axis=-1) < tolerance
+            background |= on_planes(pts, wall_planes, tolerance)
     if near is not None:
         background |= ~np.asarray(near, bool)
     background &= reading & ~np.asarray(mask, bool)
