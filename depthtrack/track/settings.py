@@ -72,11 +72,12 @@ class ObserveSettings:
     wall_background : bool
         Readings on the plane of a wall the segmentation dropped (``Foreground.wall_planes``,
         within its inlier distance) are background, as on the floor, also inside the depth
-        band and near the person (the default since 2026-11-28, README "A frontal cartwheel
-        before a wall"). Off, as before: a wall closer behind the person than ``depth_band``
-        is part of the observation near the person, and a misplaced limb can explain it (dev
-        probe: a frontal cartwheel on SR4000 with the wall 0.3 - 0.4 m behind: a leg folded
-        back onto the wall while upside down, an arm laid on it).
+        band and near the person (README "A frontal cartwheel before a wall"; on by default for
+        an hour of 2026-11-28, off again after a test sequence lying down lost 36 points).
+        Off (the default): a wall closer behind the person than ``depth_band`` is part of the
+        observation near the person, and a misplaced limb can explain it (dev probe: a
+        frontal cartwheel on SR4000 with the wall 0.3 - 0.4 m behind: a leg folded back onto
+        the wall while upside down, an arm laid on it).
     near_dilation : int
         Side (pixels) of the square that dilates the mask and the predicted silhouette into
         the region where readings may belong to the person.
@@ -95,7 +96,7 @@ class ObserveSettings:
     depth_band: float = 0.4
     far_band: float | None = None
     depth_percentiles: tuple = (2.0, 98.0)
-    wall_background: bool = True
+    wall_background: bool = False
     near_dilation: int = 7
     min_person_area: float = 0.08
     absent_frames: int = 3
