@@ -130,5 +130,9 @@ def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
     after_turn = reach_after(after_found, "heading", 30, "rank")
     assert after_turn == dict.fromkeys(CORRECTION_ORDER, 31)
     assert reach_after(after_turn, "limbs", 40, "rank")["heading"] == 31
+    # the default (since 2026-11-29): a recovery's re-track goes on past a limb swap the
+    # lost track made (a cartwheel followed 180 degrees out of phase, then found again)
+    default = TrackerSettings().heading.retro_stop
+    assert reach_after(start, "limbs", 10, default)["recovery"] == 3
     with pytest.raises(ValueError, match="retro_stop"):
         TrackerSettings(heading={"retro_stop": "never"})

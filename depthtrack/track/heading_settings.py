@@ -208,12 +208,18 @@ class HeadingSettings:
     track goes on past a limb swap or a recovery (those corrected the limbs or found the
     person again, with the heading the forward track had, which the switch now says was
     wrong), a recovery's past a limb swap; a limb swap's stops at any. Where it goes on, the
-    energy rule judges the frames past the earlier correction as any others. ``"any"`` stays
-    the default: of 70 dev sequences it changed one (90_05 seed 2, 50.5 -> 50.4 % within 10
-    cm, its four changed frames 49-55 -> 14-30 cm), and none of 12 train-clip sequences;
-    on the test split, where the failure was found (an informed figure), the 8 sequences it
-    changes gained 8.9 points on average (README, "A heading switch's re-track past an
-    earlier limb swap or recovery").
+    energy rule judges the frames past the earlier correction as any others. ``"rank"`` is
+    the default since 2026-11-29 (``"any"`` before): a recovery found by the recogniser's
+    proposals after the track had followed a cartwheel 180 degrees out of phase (an
+    upside-down star explains the silhouette as well as an upright one with the arms raised)
+    re-tracked only the frames after a limb swap that the wrong track itself had made; with
+    ``"rank"`` it re-tracks them all (dev probe, the cartwheel leaving the image: seeds 1 and
+    3 55.7 -> 75.9 and 61.9 -> 80.0 %; on the 42 dev wide sequences it changes two, 90_05
+    seeds 1 and 2, -2.9 and +0.8; paired over the 45 +0.8 points, none lost more than 5,
+    3 % more candidates; README, "A heading switch's re-track past an earlier limb swap or
+    recovery"). Earlier looks: of 70 dev sequences it changed one (90_05 seed 2, 50.5 ->
+    50.4 %), none of 12 train-clip sequences; on the test split, where the failure was
+    first found (an informed figure), the 8 sequences it changed gained 8.9 points.
 
     ``retro_revoke``: which heading switches their re-track takes back (:data:`RETRO_REVOKES`,
     :func:`.retrack.revokes`): ``"refused"``, one whose re-track re-tracked frames and took
@@ -261,7 +267,7 @@ class HeadingSettings:
     retro_after: tuple = ("heading", "limbs", "recovery")
     retro_take: str = "prefix"
     retro_give_up: int = 5
-    retro_stop: str = "any"
+    retro_stop: str = "rank"
     retro_revoke: str = "unsupported"
     margins_over: str = "energy"
 
