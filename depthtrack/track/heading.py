@@ -54,25 +54,6 @@ def turned_pose(pose):
     return x
 
 
-#: Half a turn about the camera's optical axis (camera frame: x right, y down, z forward).
-_HALF_TURN_IN_IMAGE = np.diag([-1.0, -1.0, 1.0])
-
-
-def inverted_pose(body, pose):
-    """``pose (48,)`` turned half a turn in the image plane, about the line of sight through
-    the middle of its joints' extent (at the pelvis's depth): head and feet exchanged, the
-    front still toward the camera. An upside-down body with its limbs spread (a cartwheel's
-    handstand) and an upright one with the arms raised cover the image alike, and at a
-    person 60 pixels tall the start cannot tell them apart (:attr:`HeadingSettings.
-    start_inverted`)."""
-    x = np.array(pose, dtype=np.float64)
-    joints = np.asarray(body.joint_positions(x[None]))[0]
-    centre = np.array([*(0.5 * (joints[:, :2].min(axis=0) + joints[:, :2].max(axis=0))), x[2]])
-    x[:3] = _HALF_TURN_IN_IMAGE @ (x[:3] - centre) + centre
-    x[3:6] = matrix_to_rotvec((_HALF_TURN_IN_IMAGE @ rotvec_to_matrix(x[3:6]))[None])[0]
-    return x
-
-
 #: Contract joint order with left and right exchanged.
 SIDES_SWAPPED = [JOINT_INDEX[n.replace("l_", "#").replace("r_", "l_").replace("#", "r_")]
                  for n in JOINT_NAMES]
@@ -179,8 +160,7 @@ def fit_joints(body, target, x0, iterations: int = 15, regularisation: float = 0
     return x
 
 
-def settle_heading(start, depths, track, turn, settings, key: str = "heading_check",
-                   other: str = "turned"):
+def settle_heading(start, depths, track, turn, settings):
     """Decide between the start pose and its turned twin by tracking both.
 
     Parameters
@@ -206,9 +186,7 @@ def settle_heading(start, depths, track, turn, settings, key: str = "heading_che
     ``(state, poses (K+1, 48))``: the kept track, the start frame's pose first. Its
     ``init_info["heading_check"]`` holds both scores, the choice, and ``ambiguous``: whether
     the two scores were within the margin of each other (either way round), a decision the
-    user may want to make (:attr:`StartSettings.facing`). ``key`` names that record and
-    ``other`` the twin's choice and score names (the up/down check: ``"inverted_check"``,
-    ``"inverted"``, with ``turn`` giving :func:`inverted_pose` climbed).
+    user may want to make (:attr:`StartSettings.facing`).
     """
     h = settings.heading
     a = track(start, depths)
@@ -230,20 +208,20 @@ def settle_heading(start, depths, track, turn, settings, key: str = "heading_che
     else:
         turned = b is not None and score_b[h.start_by] < (1.0 - margin) * score_a[h.start_by]
     if turned:
-        choice, state, poses = other, b[0], np.concatenate([x_turned[None], b[1]])
+        choice, state, poses = "turned", b[0], np.concatenate([x_turned[None], b[1]])
     else:
         choice, state, poses = "initial", state_a, np.concatenate([x_front[None], track_a])
 
     def rounded(score, key):
         return None if score is None or key not in score else round(score[key], 4)
-    info = {**state.init_info, key: {
+    info = {**state.init_info, "heading_check": {
         "frames": len(depths), "by": h.start_by,
         "unexplained_initial": rounded(score_a, "unexplained"),
-        f"unexplained_{other}": rounded(score_b, "unexplained"),
+        "unexplained_turned": rounded(score_b, "unexplained"),
         "energy_initial": rounded(score_a, "energy"),
-        f"energy_{other}": rounded(score_b, "energy"), "kept": choice,
-        "ambiguous": bool(ambiguous), f"{other}_ruled_out": x_turned is None,
-        **({"judged_initial": rounded(score_a, "judged"), f"judged_{other}": rounded(score_b, "judged"),
+        "energy_turned": rounded(score_b, "energy"), "kept": choice,
+        "ambiguous": bool(ambiguous), "turned_ruled_out": x_turned is None,
+        **({"judged_initial": rounded(score_a, "judged"), "judged_turned": rounded(score_b, "judged"),
             "decided_by": "judge"} if judged else {})}}
     return state.replace(init_info=info), poses
 

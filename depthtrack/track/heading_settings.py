@@ -221,17 +221,6 @@ class HeadingSettings:
     50.4 %), none of 12 train-clip sequences; on the test split, where the failure was
     first found (an informed figure), the 8 sequences it changed gained 8.9 points.
 
-    ``start_inverted``: after the front/back check, a second check of the same kind between
-    the kept start and its upside-down twin (turned half a turn in the image plane,
-    :func:`.heading.inverted_pose`, climbed on the start frame), both tracked through the
-    same ``frames`` frames and judged by ``start_by`` and its margin (``inverted_check`` in
-    ``summary.json``'s ``initialisation_details``). A clip that starts mid-cartwheel shows
-    an upside-down star that an upright one with the arms raised covers as well; the start
-    took it upright and the track turned with the wheel 180 degrees out of phase (dev probe:
-    the procedural cartwheel from 1.0 s, SR4000 at 4.75 m, seeds 1 and 3, frames 0-16).
-    **Not the default** (an option, new 2026-11-29; README, "A heading switch's re-track
-    past an earlier limb swap or recovery").
-
     ``retro_revoke``: which heading switches their re-track takes back (:data:`RETRO_REVOKES`,
     :func:`.retrack.revokes`): ``"refused"``, one whose re-track re-tracked frames and took
     none; ``"unsupported"``, one whose backward track did better on no frame next to it,
@@ -279,7 +268,6 @@ class HeadingSettings:
     retro_take: str = "prefix"
     retro_give_up: int = 5
     retro_stop: str = "rank"
-    start_inverted: bool = False
     retro_revoke: str = "unsupported"
     margins_over: str = "energy"
 
@@ -296,8 +284,6 @@ class HeadingSettings:
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
                                                    f"or false, not {self.judge_start!r}")
-        _check(isinstance(self.start_inverted, bool), f"HeadingSettings.start_inverted must be "
-                                                      f"true or false, not {self.start_inverted!r}")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
         object.__setattr__(self, "retro_after", tuple(self.retro_after))
         _check(set(self.retro_after) <= set(RETRO_KINDS),

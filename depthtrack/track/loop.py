@@ -102,8 +102,6 @@ def stream_poses(tracker, frames, init_pose=None):
                 if K > 0 and len(ahead) >= min(K, s.heading.min_frames):
                     settled = settle_heading(tracker.state, ahead, tracker.track_through,
                                              tracker.turned_start(frame), s)
-                if settled is not None and s.heading.start_inverted:
-                    settled = _settle_up_down(tracker, start_state, settled, ahead, frame)
                 if settled is not None:
                     tracker.state, poses = settled
                     started = [(i + k, p) for k, p in enumerate(poses)]
@@ -128,24 +126,6 @@ def stream_poses(tracker, frames, init_pose=None):
         yield from held[:keep]
         del held[:keep]
     yield from held
-
-
-def _settle_up_down(tracker, start_state, settled, ahead, frame):
-    """The start's up/down check (:attr:`HeadingSettings.start_inverted`): the pose the
-    front/back check kept against its upside-down twin (:func:`.heading.inverted_pose`),
-    both tracked through the same frames ahead and judged as that check judges
-    (:func:`.heading.settle_heading`). Returns ``settled`` or the inverted twin's
-    ``(state, poses)``, with both records in ``init_info``."""
-    state, poses = settled
-    other = settle_heading(start_state.replace(pose=poses[0]), ahead, tracker.track_through,
-                           tracker.inverted_start(frame), tracker.settings,
-                           key="inverted_check", other="inverted")
-    if other is None:
-        return settled
-    check = other[0].init_info["inverted_check"]
-    if check["kept"] == "inverted":
-        state, poses = other
-    return state.replace(init_info={**settled[0].init_info, "inverted_check": check}), poses
 
 
 def first_complete(areas, fraction: float, cut=None) -> int:

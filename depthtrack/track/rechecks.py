@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from .energy import fixed_energy
-from .heading import (due, flip_search, inverted_pose, limb_swapped_twins, recheck_by_search,
-                      recheck_heading, recheck_limb_sides, swapped_twins, turned_pose)
+from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
+                      recheck_limb_sides, swapped_twins, turned_pose)
 from .proposals import frame_proposals
 from .reach import reach_candidates, recheck_reach
 from .reseat import limb_climber, limb_library, recheck_reseat
@@ -138,16 +138,3 @@ def turned_start(tracker, frame):
             return None
         return x
     return turn
-
-
-def inverted_start(tracker, frame):
-    """``pose (48,) -> pose (48,)``: the upside-down twin of a start pose
-    (:func:`.heading.inverted_pose`), climbed on the start ``frame`` (re-uploaded), for the
-    start's up/down check (:attr:`HeadingSettings.start_inverted`)."""
-    def invert(pose):
-        tracker.renderers.upload(frame)
-        energy = tracker._energy(frame)
-        x, _ = climb(energy, tracker.climbers.start, inverted_pose(tracker.body, pose),
-                     tracker.recorder, passes=tracker.settings.start.passes)
-        return x
-    return invert

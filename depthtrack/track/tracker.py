@@ -46,7 +46,7 @@ from .evidence import PartModel
 from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
-from .rechecks import inverted_start, recheck_stage, turned_start
+from .rechecks import recheck_stage, turned_start
 from .record import Recorder
 from .renderers import RendererSet
 from .search import Climbers, polish, predict, search
@@ -313,10 +313,6 @@ class Tracker:
     def turned_start(self, frame):
         """:func:`.rechecks.turned_start` on the start ``frame``."""
         return turned_start(self, frame)
-
-    def inverted_start(self, frame):
-        """:func:`.rechecks.inverted_start` on the start ``frame``."""
-        return inverted_start(self, frame)
 
     # ------------------------------------------------------------------ the classic interface
     def init(self, depth0, pose=None, foreground=None):
