@@ -23,7 +23,7 @@ RETRO_TAKES = ("all", "prefix")
 #: Which earlier corrections a re-track stops at (:attr:`HeadingSettings.retro_stop`).
 RETRO_STOPS = ("any", "rank")
 #: Which heading switches their re-track takes back (:attr:`HeadingSettings.retro_revoke`).
-RETRO_REVOKES = ("never", "refused", "unsupported")
+RETRO_REVOKES = ("never", "refused", "unsupported", "outscored")
 #: What the rechecks' relative margins are fractions of (:attr:`HeadingSettings.margins_over`).
 MARGIN_BASES = ("energy", "explainable")
 #: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).

@@ -148,7 +148,8 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         # (a track given up on scores above the margin over the frames it reached)
         n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              better if h.retro_take == "prefix" else 0)
-        revoke = kind == "heading" and revokes(h.retro_revoke, n, better)
+        revoke = kind == "heading" and revokes(h.retro_revoke, n, better, len(indices),
+                                               outscored=e_back > e_forward)
         n = 0 if revoke else n
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
@@ -162,13 +163,25 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     return revoke
 
 
-def revokes(rule: str, taken: int, better: int) -> bool:
+def revokes(rule: str, taken: int, better: int, frames: int = 0,
+            outscored: bool = False) -> bool:
     """Whether a heading switch is taken back by ``rule`` (:data:`~.heading_settings.
     RETRO_REVOKES`, :attr:`HeadingSettings.retro_revoke`) when its re-track took ``taken``
-    frames and did better on the ``better`` frames next to it: ``"refused"``, none taken;
-    ``"unsupported"``, none better (even where the whole backward track was within the
-    margin and so taken); ``"never"``, never."""
-    return rule == "refused" and taken == 0 or rule == "unsupported" and better == 0
+    of the ``frames`` it re-tracked and did better on the ``better`` frames next to it, and
+    its energy summed over all ``frames`` was (``outscored``) or was not above the forward
+    track's: ``"refused"``, none taken; ``"unsupported"``, none better (even where the
+    whole backward track was within the margin and so taken); ``"outscored"``, none better,
+    or outscored and better on fewer than half the frames; ``"never"``, never.
+
+    ``"outscored"`` reads the whole stretch where the two headings differ: a turn the
+    image bears out only next to the switch (a back bend seen from the side reads as a
+    forward bend facing the other way, which the pose prior likes better) is not one the
+    frames before it bear out, though each lies within the take margin."""
+    if rule == "refused":
+        return taken == 0
+    if rule in ("unsupported", "outscored") and better == 0:
+        return True
+    return rule == "outscored" and outscored and 2 * better < frames
 
 
 def summed_excess(judged, margin: float) -> np.ndarray:
