@@ -17,6 +17,13 @@ def test_a_switch_is_taken_back_by_the_rule_asked_for():
     assert [revokes("never", *c) for c in cases] == [False] * 4
     assert [revokes("refused", *c) for c in cases] == [True, False, False, True]
     assert [revokes("unsupported", *c) for c in cases] == [True, True, False, False]
+    # "outscored" reads the whole stretch too: (taken, better, frames re-tracked, worse over them)
+    stretch = [(44, 13, 44, True), (44, 13, 44, False), (44, 22, 44, True), (9, 0, 9, False),
+               (16, 5, 16, False)]
+    assert [revokes("outscored", t, b, n, outscored=w) for t, b, n, w in stretch] == \
+        [True, False, False, True, False]
+    assert [revokes("unsupported", t, b, n, outscored=w) for t, b, n, w in stretch] == \
+        [False, False, False, True, False]
 
 
 

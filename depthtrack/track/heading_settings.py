@@ -224,7 +224,9 @@ class HeadingSettings:
     ``retro_revoke``: which heading switches their re-track takes back (:data:`RETRO_REVOKES`,
     :func:`.retrack.revokes`): ``"refused"``, one whose re-track re-tracked frames and took
     none; ``"unsupported"``, one whose backward track did better on no frame next to it,
-    even where the whole was within the margin; ``"never"``. The switch's frame is tracked
+    even where the whole was within the margin; ``"outscored"``, those and one whose
+    backward track's energy summed over all the frames it re-tracked is above the forward
+    track's (no margin) and did better on fewer than half of them; ``"never"``. The switch's frame is tracked
     again without the heading recheck, its votes and evidence cleared
     (:func:`.retrack.revoke_switch`; the entry gets ``revoked`` and the ``switch``). A right
     switch is continuous with the frames before it; a lead that was noise is not.
@@ -233,7 +235,11 @@ class HeadingSettings:
     first frame), 90.4 -> 100 %; the eight other switches on dev had frames done better next
     to them -- five right, two in 90_05 seed 2's fast spin, and 05_20 seed 3's wrong one on
     frame 44, which the image bears out for 13 frames (README, "A switch the frames before
-    it do not bear out").
+    it do not bear out"). ``"outscored"`` by default since 2026-11-29: that switch (a back
+    bend seen from the side, read as a forward bend facing the other way) re-tracked all 44
+    frames back to the start, 1 % worse over them, better on 13: taken back, 20.3 -> 76.5 %;
+    it changes one more dev sequence, 90_05 seed 2 (a wrong switch in the fast spin, 44.0 ->
+    41.2 %; README, "A turn the frames before it bear out only next to it").
     """
 
     frames: int = 10
@@ -268,7 +274,7 @@ class HeadingSettings:
     retro_take: str = "prefix"
     retro_give_up: int = 5
     retro_stop: str = "rank"
-    retro_revoke: str = "unsupported"
+    retro_revoke: str = "outscored"
     margins_over: str = "energy"
 
     def __post_init__(self):
