@@ -41,14 +41,20 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
         # seen on an H200: the search turned the track before the recheck had to
         pytest.xfail("the recheck had to switch only on llvmpipe; another rasteriser's rounding "
                      "let the search turn the track first")
-    (switch,) = info["heading_switches"]
-    (retrack,) = info["heading_retracks"]
+    # the default's revoke rule ("outscored") takes the first switch back (frame 4: its four
+    # backward frames 1 % worse, better on one of them), and the recheck turns the track
+    # again four frames later; that switch's re-track goes back to the start
+    switch = info["heading_switches"][-1]
+    retracks = [r for r in info["heading_retracks"] if not r.get("revoked")]
+    assert all(r["index"] < switch["index"] for r in info["heading_retracks"] if r.get("revoked"))
+    retrack = retracks[-1]
     assert retrack["index"] == switch["index"] and retrack["taken"]
     assert retrack["first"] == 0 and retrack["last"] == switch["index"] - 1
     assert retrack["frames_taken"] == retrack["frames"] and retrack["first_taken"] == 0
-    # the two headings explain these frames alike (the mirrored even a little better):
-    # continuity with the switch is what the re-track adds
-    assert abs(retrack["energy_backward"] / retrack["energy_forward"] - 1.0) < 0.05
+    # before the first switch the two headings explain the frames alike (the mirrored even
+    # a little better: continuity with the switch is what the re-track adds); the frames
+    # the revoke left back to front score worse, so the backward track is no worse overall
+    assert retrack["energy_backward"] <= 1.05 * retrack["energy_forward"]
     # no frame left back to front, frame 0 included (the previous test: without the
     # re-track the same start is mirrored, 25 cm and more, until the switch)
     assert err.max() < 0.1

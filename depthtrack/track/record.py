@@ -11,7 +11,7 @@ from contextlib import contextmanager
 #: Timed stages (seconds). ``association`` and ``recover`` include the render, search,
 #: detect and evidence time spent inside them; ``search`` excludes its render time.
 STAGES = ("segment", "render", "detect", "evidence", "search", "association", "init", "recover",
-          "heading", "propose", "reach", "reseat", "polish")
+          "heading", "propose", "reach", "reseat", "polish", "final")
 #: Counters. ``correspondences`` / ``accepted`` count every correspondence the association
 #: tried / kept; ``proposal_correspondences`` / ``proposal_accepted`` those of them from the
 #: recogniser's joint proposals (``ProposalSettings.evidence``).
@@ -87,7 +87,8 @@ class Recorder:
         ``recover`` global searches after a lost track (includes their render time);
         ``heading`` the front/back recheck (includes its render and search time);
         ``propose`` the part recogniser and its joint proposals; ``polish`` the finest rung
-        again at the finer tile (includes its render time);
+        again at the finer tile (includes its render time); ``final`` the final polish of
+        each finished pose (:mod:`.final_polish`; its segmentation and render time too);
         ``other`` = per-frame total minus segment, render, search, detect, evidence, propose
         (frame loading, bookkeeping).
         """

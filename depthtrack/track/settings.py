@@ -248,7 +248,8 @@ class AssociateSettings:
 
 @dataclass(frozen=True)
 class PolishSettings:
-    """Polish: the finest rung of the search once more at a finer tile resolution.
+    """Polish: the finest rung of the search once more at a finer tile resolution, and the
+    final polish of each finished pose (:mod:`.final_polish`).
 
     Attributes
     ----------
@@ -256,14 +257,27 @@ class PolishSettings:
         Tile side of the polish (pixels); 0 = no polish.
     fine_iterations : int
         Most batches per block.
+    final_tile : int
+        Largest tile side (pixels) of the final polish: each pose, once no correction can
+        change it any more, climbed again without the motion prior on tiles as fine as the
+        camera's own pixels (the power of two nearest the ROI's side, at most this); 0 = none.
+    final_levels : int
+        Rungs the final polish adds below the search's finest (each halves the steps).
+    final_iterations : int
+        Most batches per block of the final polish.
     """
 
     fine_tile: int = 128
     fine_iterations: int = 4
+    final_tile: int = 256
+    final_levels: int = 2
+    final_iterations: int = 4
 
     def __post_init__(self):
         _power_of_two(self.fine_tile, "fine_tile", zero_ok=True)
-        _positive(self, "fine_iterations")
+        _power_of_two(self.final_tile, "final_tile", zero_ok=True)
+        _positive(self, "fine_iterations", "final_iterations")
+        _positive(self, "final_levels", allow_zero=True)
 
 
 @dataclass(frozen=True)
@@ -462,13 +476,13 @@ class TrackerSettings:
 #: points less accurate, a 2-s clip about twice as fast (mostly the shape fit left out; each
 #: frame 3 to 20 % faster; README, "Speed"): the template
 #: body (no shape fit: 16 trial frames and a re-track fewer), one pass of the per-frame search
-#: instead of two, no polish at the finer tile, and the rechecks half as often (front/back
+#: instead of two, no polish at the finer tile nor final polish, and the rechecks half as often (front/back
 #: and the limbs' sides every 8th frame, the reach every 4th) -- the rechecks climb two or
 #: three poses from the coarsest rung each and were two thirds of the candidates scored.
 PRESETS = {
     "default": {},
     "fast": {"shape": {"enabled": False}, "search": {"passes": 1},
-             "polish": {"fine_tile": 0},
+             "polish": {"fine_tile": 0, "final_tile": 0},
              "heading": {"every": 8, "limb_every": 8}, "propose": {"reach_every": 4}},
 }
 

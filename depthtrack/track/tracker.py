@@ -343,9 +343,13 @@ class Tracker:
     # ------------------------------------------------------------------ the frame loop
     def stream(self, frames, init_pose=None):
         """Track depth frames from any iterable; yields ``(index, pose (48,) or None)`` in order
-        (:func:`.loop.stream_poses`)."""
+        (:func:`.loop.stream_poses`; each pose final-polished where
+        :attr:`~.settings.PolishSettings.final_tile` asks, :mod:`.final_polish`)."""
+        from .final_polish import final_polished
         from .loop import stream_poses
 
+        if self.settings.polish.final_tile and self.method != "ep":
+            return final_polished(self, frames, init_pose)
         return stream_poses(self, frames, init_pose)
 
     def track_sequence(self, seq, progress=None, init_pose=None) -> TrackResult:
