@@ -116,7 +116,7 @@ def add_preset_option(p) -> None:
                    help="tracker settings to start from: default (the most accurate) or fast "
                         "(a few points less accurate; a 2-s clip about twice as fast, mostly "
                         "by leaving out the shape fit, each frame 3 to 20 %% faster: no shape "
-                        "fit, one search pass, no polish, rechecks half as often; README, "
+                        "fit, one search pass, no polish nor final polish, rechecks half as often; README, "
                         "\"Speed\"); --settings, --shape-fit and --facing then change it")
 
 
