@@ -19,13 +19,34 @@ SLOW_FILES = {
     "test_track_shape_fit.py": 137, "test_track_tracker.py": 130, "test_track_facing.py": 119,
     "test_track_bends.py": 109, "test_track_proposals.py": 87, "test_track_reference.py": 83,
     "test_track_revoke.py": 82, "test_track_stream_gl.py": 74, "test_batch.py": 67,
-    "test_track_retrack.py": 37, "test_kill.py": 29, "test_demo.py": 23,
+    "test_track_final_polish.py": 60, "test_track_retrack.py": 37, "test_kill.py": 29,
+    "test_demo.py": 23,
 }
 
 
 def pytest_collection_modifyitems(items):
     """The slowest files first (a stable sort: each file's tests stay together, in order)."""
     items.sort(key=lambda item: -SLOW_FILES.get(item.path.name, 0))
+
+
+@pytest.fixture(autouse=True)
+def _final_polish_only_where_asked(request, monkeypatch):
+    """The tracker's final polish (``PolishSettings.final_tile``) is off in tests not marked
+    ``final_polish``. It changes no decision of a track -- ``test_track_final_polish.py``
+    tracks with and without it, a heading switch, its re-track and revoke included, and
+    finds every frame's energy alike -- and it adds about a third to each tracked frame's
+    time, which the tests of the decisions do not need. Commands run as subprocesses
+    (``depthtrack track``, the demo) still run the default tracker, final polish included."""
+    if request.node.get_closest_marker("final_polish") is not None:
+        return
+    import inspect
+
+    from depthtrack.track.settings import PolishSettings
+
+    names = [n for n in inspect.signature(PolishSettings.__init__).parameters if n != "self"]
+    defaults = dict(zip(names, PolishSettings.__init__.__defaults__))
+    defaults["final_tile"] = 0
+    monkeypatch.setattr(PolishSettings.__init__, "__defaults__", tuple(defaults.values()))
 
 
 @pytest.fixture(scope="session")
