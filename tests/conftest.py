@@ -34,8 +34,8 @@ def _final_polish_only_where_asked(request, monkeypatch):
     """The tracker's final polish (``PolishSettings.final_tile``) is off in tests not marked
     ``final_polish``. It changes no decision of a track -- ``test_track_final_polish.py``
     tracks with and without it, a heading switch, its re-track and revoke included, and
-    finds every frame's energy alike -- and it adds about a third to each tracked frame's
-    time, which the tests of the decisions do not need. Commands run as subprocesses
+    finds every frame's energy alike -- and it adds a third to each tracked frame's time
+    (the whole suite about 50 s), which the tests of the decisions do not need. Commands run as subprocesses
     (``depthtrack track``, the demo) still run the default tracker, final polish included."""
     if request.node.get_closest_marker("final_polish") is not None:
         return
