@@ -39,14 +39,13 @@ def _final_polish_only_where_asked(request, monkeypatch):
     (``depthtrack track``, the demo) still run the default tracker, final polish included."""
     if request.node.get_closest_marker("final_polish") is not None:
         return
-    import inspect
+    import dataclasses
 
     from depthtrack.track.settings import PolishSettings
 
-    names = [n for n in inspect.signature(PolishSettings.__init__).parameters if n != "self"]
-    defaults = dict(zip(names, PolishSettings.__init__.__defaults__))
-    defaults["final_tile"] = 0
-    monkeypatch.setattr(PolishSettings.__init__, "__defaults__", tuple(defaults.values()))
+    defaults = tuple(0 if f.name == "final_tile" else f.default
+                     for f in dataclasses.fields(PolishSettings))
+    monkeypatch.setattr(PolishSettings.__init__, "__defaults__", defaults)
 
 
 @pytest.fixture(scope="session")

@@ -24,19 +24,23 @@ sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
-from depthtrack.evaluate.fit import summarize_fit, track_fit  # noqa: E402
-from depthtrack.evaluate.metrics import fraction_within, mean_error, point_errors  # noqa: E402
+from depthtrack.evaluate.runs import score  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
 from depthtrack.track.final_polish import FinalPolish  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
 from track_replay import read_track, track_parser  # noqa: E402
 
 
+#: The figures printed and written, as ``depthtrack eval --json`` names them.
+KEYS = ("within_10cm", "mean_error_m", "silhouette_iou", "unexplained_fraction",
+        "median_depth_residual_m")
+
+
 def figures(seq, body, poses) -> dict:
-    """Within 10 cm, mean joint error (m) and the fit figures of ``poses (F, 48)``."""
-    err = point_errors(np.asarray(body.joint_positions(poses)), seq.joints)
-    return {"within_10cm": fraction_within(err), "mean_error_m": mean_error(err),
-            **summarize_fit(track_fit(seq, poses, body))}
+    """:data:`KEYS` of ``poses (F, 48)``, scored as ``depthtrack eval`` scores a track."""
+    joints = np.asarray(body.joint_positions(poses))
+    summary = score("track", "hc+ep", seq, joints, poses=poses, body=body).summary
+    return {k: summary[k] for k in KEYS}
 
 
 def main(argv=None) -> int:
