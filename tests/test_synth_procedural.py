@@ -52,3 +52,26 @@ def test_camera_pitch_and_height_are_honoured(body):
     assert high.pitch_deg == pytest.approx(20.0) and high.height == pytest.approx(2.2)
     assert 0 < default.pitch_deg < 15                 # aimed at the middle of the body from chest height
     assert high.in_view == 1.0                        # backed off until the whole body is in view
+
+
+def test_a_motion_that_travels_too_far_stays_within_the_sensors_range(body):
+    """3.5 m straight at the camera, swaying side to side (whole-body roll up to 0.5 rad,
+    as a cartwheel's run-up does), cannot stay wholly in view at any distance;
+    the placement then keeps the most of the body seen -- not a distance where the person
+    starts beyond the sensor's range (where a few more frames happen to be whole)."""
+    from depthtrack.camera import Camera
+    from depthtrack.synth.scene import place_camera
+
+    camera = Camera.preset("sr4000")
+    poses = np.zeros((50, body.dof))
+    poses[:, 2] = -np.linspace(0.0, 3.5, 50)           # it faces -z: goes 3.5 m towards the camera
+    poses[:, 5] = 0.5 * np.sin(np.linspace(0.0, 2 * np.pi, 50))
+    place = place_camera(camera, body, poses, max_depth=5.0)
+    assert place.in_view < 1.0
+    assert place.visible > 0.9
+    pelvis = body.joint_positions(poses)[:, C["pelvis"]]
+    T = place.world_to_camera
+    depth = pelvis @ T[2, :3] + T[2, 3]
+    assert depth.max() < 5.0         # in range from the first frame (counting whole frames: 5.25 m)
+    fixed = place_camera(camera, body, poses, max_depth=5.0, distance=place.distance)
+    assert fixed.visible == pytest.approx(place.visible) and fixed.in_view == place.in_view

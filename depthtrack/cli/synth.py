@@ -44,7 +44,8 @@ def register(subparsers) -> None:
                    help="camera intrinsics preset (default sr4000, 176 x 144)")
     p.add_argument("--distance", type=number(0, 100, lo_open=True), default=None, metavar="M",
                    help="horizontal camera-subject distance in metres (default: the smallest "
-                        "from 2.5 m in 0.25 m steps that keeps the whole body in view)")
+                        "from 2.5 m in 0.25 m steps that keeps the whole body in view and range, "
+                        "or for a motion that travels further, the one that sees most of the body)")
     p.add_argument("--azimuth", type=number(-360, 360), default=0.0, metavar="DEG",
                    help="turn the camera about the subject from straight in front (degrees)")
     p.add_argument("--camera-height", type=number(0, 20, lo_open=True), default=None, metavar="M",
@@ -113,7 +114,8 @@ def run(args) -> int:
         source = synth["source"]
         units = f"; BVH units {source['units_source']}" if source.get("kind") == "bvh" else ""
         print(f"wrote {out}: camera {synth['camera_preset']} at {place['distance_m']:.2f} m, "
-              f"{place['frames_in_view'] * 100:.0f}% of frames fully in view, noise "
+              f"{place['frames_in_view'] * 100:.0f}% of frames fully in view "
+              f"({place['body_visible'] * 100:.0f}% of the body seen), noise "
               f"{synth['noise']['model']}, {time.perf_counter() - t0:.1f} s{units}")
         if source.get("skipped_leading_frames"):
             print(f"dropped the first {source['skipped_leading_frames']} BVH frame(s): "

@@ -5,7 +5,9 @@ a horizontal floor ``y = floor_y``. The camera stands in front of the subject's
 initial heading (:func:`initial_heading`: its left side when it lies; turned by
 ``azimuth`` about the vertical), at about chest height,
 looking slightly down at the middle of the body; the distance grows until the
-whole body stays in view in every frame unless the caller fixes it.
+whole body stays in view (inside the image and the sensor's range) in every frame, or,
+for a motion that travels further than the view holds, is the one at which the camera
+sees the most of the body, unless the caller fixes it.
 """
 from __future__ import annotations
 
@@ -89,7 +91,9 @@ class Placement:
         behind the body's farthest point, or nearer (down to 0.3 m behind it) so that
         it stays within the sensor's range.
     in_view : float
-        Fraction of (sampled) frames with every body vertex inside the image.
+        Fraction of (sampled) frames with every body vertex inside the image and range.
+    visible : float
+        Fraction of the body's vertices over the (sampled) frames inside the image and range.
     """
 
     world_to_camera: np.ndarray
@@ -101,12 +105,14 @@ class Placement:
     floor_y: float
     wall_distance: float
     in_view: float
+    visible: float = 1.0
 
     def to_dict(self) -> dict:
         return {"world_to_camera": np.round(self.world_to_camera, 6).tolist(),
                 "distance_m": round(self.distance, 4), "height_m": round(self.height, 4),
                 "pitch_deg": round(self.pitch_deg, 3), "azimuth_deg": self.azimuth_deg,
-                "wall_distance_m": round(self.wall_distance, 4), "frames_in_view": round(self.in_view, 4)}
+                "wall_distance_m": round(self.wall_distance, 4), "frames_in_view": round(self.in_view, 4),
+                "body_visible": round(self.visible, 4)}
 
 
 def look_from(position, target) -> np.ndarray:
@@ -124,14 +130,23 @@ def look_from(position, target) -> np.ndarray:
     return T
 
 
-def _fraction_in_view(camera, points, margin=2.0, max_depth=np.inf):
-    """Fraction of frames whose points (N, V, 3) (camera frame) all project inside the image within range."""
+def _visibility(camera, points, margin=2.0, max_depth=np.inf):
+    """How much of the body a camera sees, for points (N, V, 3) in the camera frame.
+
+    Returns
+    -------
+    in_view : float
+        Fraction of frames whose points all project inside the image (``margin`` pixels
+        in) and lie nearer than ``max_depth``.
+    visible : float
+        Fraction of all points (every frame) that do.
+    """
     z = points[..., 2]
     uv = camera.project(points)
     inside = (z > 0.05) & (z < max_depth) & (uv[..., 0] >= margin) \
         & (uv[..., 0] <= camera.width - 1 - margin) \
         & (uv[..., 1] >= margin) & (uv[..., 1] <= camera.height - 1 - margin)
-    return float(np.mean(np.all(inside, axis=1)))
+    return float(np.mean(np.all(inside, axis=1))), float(np.mean(inside))
 
 
 def place_camera(camera, body, poses, distance=None, azimuth_deg=0.0, height=None,
@@ -152,8 +167,12 @@ def place_camera(camera, body, poses, distance=None, azimuth_deg=0.0, height=Non
     distance : float or None
         Horizontal distance from the camera to the centre of the motion; ``None`` =
         the smallest multiple of ``step`` from ``min_distance`` at which the whole body
-        is in view (and nearer than ``max_depth``) in every sampled frame, or else the
-        distance that keeps it so in the most frames (up to ``max_distance``).
+        is in view (and nearer than ``max_depth``) in every sampled frame, or else (a
+        motion that travels further than the view holds) the distance at which the
+        camera sees the largest share of the body's surface over the motion (up to
+        ``max_distance``; ties to the one with the most frames wholly in view). Counting
+        whole frames alone would trade a hand leaving the image for the whole body
+        beyond the sensor's range.
     azimuth_deg : float
         Turns the camera about the subject (vertical axis) from straight in front.
     height : float or None
@@ -187,20 +206,22 @@ def place_camera(camera, body, poses, distance=None, azimuth_deg=0.0, height=Non
             p = np.radians(float(pitch_deg))
             T = look_from(position, position - np.cos(p) * heading + np.sin(p) * _DOWN)
         pts = verts @ T[:3, :3].T + T[:3, 3]
-        return T, position, _fraction_in_view(camera, pts, max_depth=max_depth)
+        return (T, position) + _visibility(camera, pts, max_depth=max_depth)
 
     if distance is not None:
         d = float(distance)
-        T, position, in_view = build(d)
+        T, position, in_view, visible = build(d)
     else:
         best = None
         for d in np.arange(min_distance, max_distance + 1e-9, step):
             candidate = build(float(d)) + (float(d),)
-            if best is None or candidate[2] > best[2]:
-                best = candidate
             if candidate[2] >= 1.0:
+                best = candidate
                 break
-        T, position, in_view, d = best
+            # the share seen to the percent first, then whole frames in view
+            if best is None or (round(candidate[3], 2), candidate[2]) > (round(best[3], 2), best[2]):
+                best = candidate
+        T, position, in_view, visible, d = best
     view = T[2, :3]
     horizontal = view - view[1] * _DOWN
     horizontal /= np.linalg.norm(horizontal)
@@ -213,7 +234,7 @@ def place_camera(camera, body, poses, distance=None, azimuth_deg=0.0, height=Non
     pitch = np.degrees(np.arcsin(np.clip(view @ _DOWN, -1, 1)))
     return Placement(world_to_camera=T, position=position, distance=d, height=cam_height,
                      pitch_deg=float(pitch), azimuth_deg=float(azimuth_deg), floor_y=floor_y,
-                     wall_distance=wall, in_view=in_view)
+                     wall_distance=wall, in_view=in_view, visible=visible)
 
 
 def scene_meshes(placement: Placement, half_width: float = 10.0, wall_height: float = 4.0):
