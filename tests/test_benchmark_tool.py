@@ -150,3 +150,13 @@ def test_compare_reports_prints_the_paired_difference_and_refuses_bad_input(tmp_
     other = tmp_path / "other.json"
     other.write_text(json.dumps(_report_of({"x": 0.5})))
     assert tool.main([str(a), str(other)]) == 2
+
+
+def test_each_sequence_records_how_much_of_the_body_the_camera_saw(tool, tmp_path):
+    from depthtrack.synth.generate import synthesize_procedural
+
+    seq = tmp_path / "seq"
+    synthesize_procedural("sidestep", seq, fps=5.0, seconds=1.0, noise="none")
+    place = tool.synth_placement(seq)
+    assert set(place) == {"distance_m", "frames_in_view", "body_visible"}
+    assert place["frames_in_view"] == 1.0 and place["body_visible"] == 1.0 and place["distance_m"] >= 2.5

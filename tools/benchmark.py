@@ -160,6 +160,14 @@ def synth_command(kind, source, out, start, seconds, condition, seed) -> list:
     return cmd + ["--noise", "tof", "--seed", str(seed), "--quiet"]
 
 
+def synth_placement(path) -> dict:
+    """The camera placement ``depthtrack synth`` chose (``sequence.json``'s ``synth.placement``):
+    distance, how many frames hold the whole body in view and how much of the body is seen."""
+    meta = json.loads((Path(path) / "sequence.json").read_text(encoding="utf-8"))
+    place = meta.get("synth", {}).get("placement", {})
+    return {k: place.get(k) for k in ("distance_m", "frames_in_view", "body_visible")}
+
+
 def shown(path) -> str:
     """A path as the report shows it: relative to the repository root (where the commands run) when near."""
     rel = os.path.relpath(path, REPO)
@@ -328,7 +336,7 @@ def main(argv=None) -> int:
                     "condition": cond, "condition_label": condition_label(cond),
                     "seed": seed, "seed_index": s_index, "start_s": start,
                     "synth_command": shlex.join(synth), "eval_command": shlex.join(evaluate),
-                    "facing_given": facing,
+                    "facing_given": facing, "placement": synth_placement(path),
                     "metrics": {m: result[seq_name][m] for m in methods}}
                    for seq_name, path, synth, seed, s_index in group]
         if args.keep_tracks:

@@ -204,15 +204,17 @@ def markdown(report: dict) -> str:
                        f"{_cm(g['mean_error_m'])} | {_cm(g['max_error_m'])} | {g['fps_min']:.2f} | "
                        f"{_pct(g.get('back_to_front_fraction') or _UNKNOWN)} |")
     out += ["", "## Per sequence", "",
-            "| sequence | method | frames | within 10 cm | mean error (cm) | fps | back to front |",
-            "|---|---|---:|---:|---:|---:|---:|"]
+            "| sequence | method | frames | within 10 cm | mean error (cm) | fps | back to front | body seen |",
+            "|---|---|---:|---:|---:|---:|---:|---:|"]
     for s in report["sequences"]:
+        seen = (s.get("placement") or {}).get("body_visible")
         for m in methods:
             x = s["metrics"][m]
             b2f = x.get("back_to_front_fraction")
             out.append(f"| {s['name']} | {m} | {x['frames']} | {100 * x['within_10cm']:.0f}% | "
                        f"{100 * x['mean_error_m']:.1f} | {x['fps']:.2f} | "
-                       f"{'-' if b2f is None else f'{100 * b2f:.0f}%'} |")
+                       f"{'-' if b2f is None else f'{100 * b2f:.0f}%'} | "
+                       f"{'-' if seen is None else f'{100 * seen:.0f}%'} |")
     out += ["", "## Commands", "", "```", report["command"]]
     for s in report["sequences"]:
         out.append(s["synth_command"])
