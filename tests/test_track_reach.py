@@ -80,3 +80,59 @@ def test_the_reach_recheck_takes_a_candidate_only_on_a_clear_lead():
     assert not switched and changes == {}
     off = TrackerSettings(propose={"reach_every": 0})
     assert not recheck_reach(state, np.zeros(48), refit, raw, candidates, off)[2]
+
+
+def test_an_arm_in_plain_view_that_the_pose_leaves_unexplained_is_reached_for():
+    """The truth raises its right arm forward; the tracked pose has it down. Rendered on
+    SR4000 pixels, the person's raised forearm is a blob no part of the pose covers, and
+    the right arm's candidate reaches into it."""
+    from depthtrack.camera import Camera
+    from depthtrack.render import FrameRenderer
+    from depthtrack.track.reach import blob_reach_candidates, unexplained_blobs
+
+    body = BodyModel.default(height=1.75, mesh="decimated")
+    camera = Camera.preset("sr4000")
+    truth_pose = _raised_right_arm()
+    tracked = np.zeros(48)
+    tracked[2] = 3.0
+    with FrameRenderer(camera) as r:
+        person = r.render(body, truth_pose)
+        model = r.render(body, tracked)
+    pixels = np.count_nonzero(person)
+    blobs = unexplained_blobs(model, person, camera, int(0.02 * pixels))
+    assert 1 <= len(blobs) <= 3
+    assert all(len(b) >= 0.02 * pixels for b in blobs)
+    # the points are the person's surface: back on its pixels
+    uv = camera.project(blobs[0])
+    u, v = np.round(uv[:, 0]).astype(int), np.round(uv[:, 1]).astype(int)
+    np.testing.assert_allclose(person[v, u], blobs[0][:, 2], atol=1e-5)
+    truth = np.asarray(body.joint_positions(truth_pose))
+    poses, limbs = blob_reach_candidates(body, tracked, blobs)
+    assert "r_arm" in limbs
+    wrist = [np.linalg.norm(np.asarray(body.joint_positions(p))[J["r_wrist"]] - truth[J["r_wrist"]])
+             for p, limb in zip(poses, limbs) if limb == "r_arm"]
+    before = np.linalg.norm(np.asarray(body.joint_positions(tracked))[J["r_wrist"]] - truth[J["r_wrist"]])
+    assert before > 0.3 and min(wrist) < 0.15
+    # the same pose as the person leaves nothing to reach for
+    assert unexplained_blobs(person, person, camera, int(0.02 * pixels)) == []
+
+
+def test_a_person_pixel_in_front_of_the_model_is_unexplained_beyond_the_gap():
+    from depthtrack.camera import Camera
+
+    camera = Camera(8, 8, 10.0, 10.0, 3.5, 3.5)
+    person = np.zeros((8, 8))
+    person[2:6, 2:6] = 2.0
+    model = np.where(person > 0, 2.05, 0.0)              # 5 cm behind: explained
+    assert unexplained_blobs_of(model, person, camera) == []
+    model[2:4, 2:6] = 2.3                                 # 30 cm behind on two rows: not
+    blobs = unexplained_blobs_of(model, person, camera)
+    assert len(blobs) == 1 and len(blobs[0]) == 8
+    np.testing.assert_allclose(blobs[0][:, 2], 2.0)
+    np.testing.assert_allclose(blobs[0][0], [(2 - 3.5) * 2.0 / 10.0, (2 - 3.5) * 2.0 / 10.0, 2.0])
+
+
+def unexplained_blobs_of(model, person, camera):
+    from depthtrack.track.reach import unexplained_blobs
+
+    return unexplained_blobs(model, person, camera, 2)

@@ -12,10 +12,21 @@ the wrist or ankle proposals it could reach and that no hand (or foot) of the po
 placed at a proposal of its own class; the candidates are scored in one batch, the best is
 climbed like the tracked pose, and it replaces the pose when its energy without the motion
 prior is lower by :attr:`~.settings.ProposalSettings.reach_margin` (a fraction).
+
+Where the recogniser sees no hand, the person's pixels the pose leaves unexplained can
+(:attr:`~.settings.ProposalSettings.reach_unexplained`): a limb tracked hidden behind the
+body, where it costs nothing, while the real one is raised in plain view, leaves a
+limb-shaped blob of the person uncovered (dev: 90_05 seed 1, a jump kick on SR4000,
+frames 18-34: an arm's worth of person pixels uncovered on every frame, no wrist
+proposal). Each large enough blob (:func:`unexplained_blobs`) offers each limb its point
+farthest from the limb's root within reach as one more end to reach to
+(:func:`blob_reach_candidates`); the same energy test decides.
 """
 from __future__ import annotations
 
 import numpy as np
+
+import cv2
 
 from ..contract import JOINT_INDEX
 from .energy import relative_lead
@@ -104,6 +115,92 @@ def reach_candidates(body, pose, proposals, min_confidence: float, near: float =
     return np.array(out).reshape(-1, len(pose)), limbs
 
 
+def unexplained_blobs(model_depth, person_depth, camera, min_pixels: int, gap: float = 0.1,
+                      max_blobs: int = 3) -> list:
+    """The person's pixels a pose leaves unexplained, in connected blobs, as 3D points.
+
+    Parameters
+    ----------
+    model_depth : (T, T) float
+        The pose rendered (camera z, metres), 0 where nothing is drawn.
+    person_depth : (T, T) float
+        The person's observed depth on the same pixels, 0 elsewhere and where the camera
+        read nothing.
+    camera : Camera
+        Of those pixels (a tile's: :func:`depthtrack.render.tiles.tile_camera`).
+    min_pixels : int
+        Smaller blobs are left out.
+    gap : float
+        A person pixel the model covers but lies behind by more than this (m) is
+        unexplained too: an arm in front of the body where the model has the body.
+    max_blobs : int
+
+    Returns
+    -------
+    list of (n_i, 3) float
+        Camera-frame points of each blob, the largest first.
+    """
+    model = np.asarray(model_depth, dtype=np.float64)
+    person = np.asarray(person_depth, dtype=np.float64)
+    miss = (person > 0) & ((model <= 0) | (model > person + gap))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(miss.astype(np.uint8), connectivity=8)
+    areas = stats[1:, cv2.CC_STAT_AREA]
+    out = []
+    for k in np.argsort(-areas, kind="stable")[:max_blobs] + 1:
+        if stats[k, cv2.CC_STAT_AREA] < max(1, min_pixels):
+            break
+        v, u = np.nonzero(labels == k)
+        z = person[v, u]
+        out.append(np.stack([(u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z], axis=1))
+    return out
+
+
+def blob_reach_candidates(body, pose, blobs, near: float = 0.1):
+    """Poses with one limb re-fitted to reach into an unexplained blob.
+
+    Parameters
+    ----------
+    body : BodyModel
+    pose : (48,) float
+    blobs : list of (n_i, 3) float
+        :func:`unexplained_blobs`.
+    near : float
+        As in :func:`reach_candidates`.
+
+    Returns
+    -------
+    poses : (K, 48) float
+        For each limb and blob: the pose fitted with the limb's end at the blob's point
+        farthest from the limb's root that the limb can reach (root to point at most its
+        length plus :data:`REACH_SLACK`), the middle joint free, every other joint kept;
+        none where that point is within ``near`` of an end of the limb's class.
+    limbs : list of str
+    """
+    pose = np.asarray(pose, dtype=np.float64)
+    joints = np.asarray(body.joint_positions(pose))
+    rest = np.asarray(body.joint_positions(np.zeros(len(pose))))
+    out, limbs = [], []
+    for limb, names in LIMBS.items():
+        root, mid, end = (JOINT_INDEX[n] for n in names)
+        length = float(np.linalg.norm(rest[mid] - rest[root]) + np.linalg.norm(rest[end] - rest[mid]))
+        both_ends = joints[_class_ids(names[2])]
+        for points in blobs:
+            d = np.linalg.norm(points - joints[root], axis=1)
+            within = d <= length + REACH_SLACK
+            if not within.any():
+                continue
+            p = points[within][np.argmax(d[within])]
+            if np.linalg.norm(both_ends - p, axis=1).min() < near:
+                continue
+            target = joints.copy()
+            target[end] = p
+            weights = np.ones(len(joints))
+            weights[mid] = 0.0
+            out.append(fit_joints(body, target, pose, weights=weights))
+            limbs.append(limb)
+    return np.array(out).reshape(-1, len(pose)), limbs
+
+
 def recheck_reach(state, pose, refit, energy_of, candidates, settings, floor: float = 0.0):
     """The reach recheck of one frame (module docstring): keep ``pose`` or the best limb
     re-fitted to a far proposal.
@@ -117,8 +214,9 @@ def recheck_reach(state, pose, refit, energy_of, candidates, settings, floor: fl
         A pose climbed on the frame by the energy without the motion prior, and that energy.
     energy_of : callable ``(poses (K, 48)) -> (K,)``
         That energy, unclimbed, in one batch.
-    candidates : callable ``(pose (48,)) -> (poses (K, 48), limbs list of str)``
-        :func:`reach_candidates` on this frame.
+    candidates : callable ``(pose (48,)) -> (poses (K, 48), limbs list of str[, sources list of str])``
+        :func:`reach_candidates` on this frame (and :func:`blob_reach_candidates`; each
+        candidate's source, ``"proposal"`` or ``"unexplained"``, goes into the record).
     settings : TrackerSettings
     floor : float
         The energy every pose pays (:attr:`~.heading_settings.HeadingSettings.margins_over`);
@@ -134,7 +232,7 @@ def recheck_reach(state, pose, refit, energy_of, candidates, settings, floor: fl
     """
     if not due(state, settings.propose.reach_every):
         return pose, {}, False
-    poses, limbs = candidates(pose)
+    poses, limbs, *sources = candidates(pose)
     if not len(poses):
         return pose, {}, False
     best = int(np.argmin(energy_of(poses)))
@@ -144,4 +242,6 @@ def recheck_reach(state, pose, refit, energy_of, candidates, settings, floor: fl
         return pose, {}, False
     reach = {"frame": state.frame, "limb": limbs[best], "energy_kept": round(float(e_pose), 1),
              "energy_reached": round(float(e_y), 1)}
+    if sources:
+        reach["from"] = sources[0][best]
     return np.asarray(y, dtype=np.float64), {"reaches": state.reaches + (reach,)}, True

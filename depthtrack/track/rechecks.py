@@ -17,7 +17,7 @@ from .energy import fixed_energy
 from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
 from .proposals import frame_proposals
-from .reach import reach_candidates, recheck_reach
+from .reach import blob_reach_candidates, reach_candidates, recheck_reach, unexplained_blobs
 from .reseat import limb_climber, limb_library, recheck_reseat
 from .search import climb
 from .start import global_search, start_up, wrong_side
@@ -65,9 +65,7 @@ def recheck_stage(tracker, state, energy, frame, x):
     if tracker.forest is not None:
         with recorder.timed("reach"):
             y, more, reached = recheck_reach(
-                state, x, refit, bare, lambda pose: reach_candidates(
-                    tracker.body, pose, frame_proposals(tracker, frame),
-                    s.propose.min_confidence), s, floor)
+                state, x, refit, bare, lambda pose: reach_all(tracker, frame, pose), s, floor)
         if reached:
             return y, {**changes, **more}, "reach"
     if s.heading.reseat_every:
@@ -86,6 +84,26 @@ def recheck_stage(tracker, state, energy, frame, x):
     if taken is None:
         return x, changes, None
     return taken, {**changes, **more}, "search"
+
+
+def reach_all(tracker, frame, pose):
+    """The reach recheck's candidates for ``pose (48,)`` on ``frame``: to the recogniser's
+    proposals (:func:`.reach.reach_candidates`) and, with
+    :attr:`~.settings.ProposalSettings.reach_unexplained`, into the blobs of the person's
+    pixels the pose leaves unexplained (:func:`.reach.blob_reach_candidates`, on the full
+    image). Returns ``(poses (K, 48), limbs, sources)``."""
+    s = tracker.settings.propose
+    poses, limbs = reach_candidates(tracker.body, pose, frame_proposals(tracker, frame), s.min_confidence)
+    sources = ["proposal"] * len(limbs)
+    if s.reach_unexplained > 0:
+        mask = frame.foreground.mask
+        person = np.where(mask, frame.depth, 0.0)
+        blobs = unexplained_blobs(tracker.renderers.depth(pose), person, tracker.camera,
+                                  int(np.ceil(s.reach_unexplained * np.count_nonzero(mask))))
+        more, more_limbs = blob_reach_candidates(tracker.body, pose, blobs)
+        poses = np.concatenate([poses, more]) if len(more) else poses
+        limbs, sources = limbs + more_limbs, sources + ["unexplained"] * len(more_limbs)
+    return poses, limbs, sources
 
 
 def heading_twins(body, settings, pose):

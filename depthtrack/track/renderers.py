@@ -88,10 +88,14 @@ class RendererSet:
 
     def silhouette(self, pose) -> np.ndarray:
         """(H, W) bool: where ``pose (48,)`` covers the full camera image (one GL render)."""
+        return self.depth(pose) > 0
+
+    def depth(self, pose) -> np.ndarray:
+        """(H, W) float: camera z of ``pose (48,)`` over the full image, 0 where it is not (one GL render)."""
         if self._frame is None:
             from ..render import FrameRenderer
             self._frame = FrameRenderer(self.camera)
-        return self._frame.render(self.body, np.asarray(pose)) > 0
+        return self._frame.render(self.body, np.asarray(pose))
 
     def release(self) -> None:
         """Free every GL object of the set (idempotent)."""

@@ -343,7 +343,10 @@ class ProposalSettings:
     wrist or ankle proposals it can reach and is not at; the best, climbed, replaces the pose
     when its energy without the motion prior is lower by the fraction ``reach_margin``
     (:mod:`.reach`: a hand or foot tracked far from where it is, which the association's
-    pruning never brings back).
+    pruning never brings back). ``reach_unexplained`` > 0 also offers each limb the farthest
+    reachable point of each blob of the person's pixels the pose leaves unexplained that
+    holds at least that share of the person's pixels (on the polish's tiles; 0 = off):
+    a limb tracked hidden while the real one is in plain view, with no proposal for it.
     """
 
     enabled: bool = True
@@ -360,6 +363,7 @@ class ProposalSettings:
     evidence_max: int = 4
     reach_every: int = 2
     reach_margin: float = 0.03
+    reach_unexplained: float = 0.0
 
     def __post_init__(self):
         for name in ("enabled", "evidence"):
@@ -377,7 +381,7 @@ class ProposalSettings:
                f"ProposalSettings.start_candidates must be true or false, not {self.start_candidates!r}")
         _positive(self, "distance", "lost_frames")
         _positive(self, "min_confidence", "lost_fraction", "accept_margin", "start_weight",
-                  "reach_every", "reach_margin", allow_zero=True)
+                  "reach_every", "reach_margin", "reach_unexplained", allow_zero=True)
 
 
 #: Group name -> settings class, in the order of a frame.
