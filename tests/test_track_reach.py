@@ -80,6 +80,10 @@ def test_the_reach_recheck_takes_a_candidate_only_on_a_clear_lead():
     assert not switched and changes == {}
     off = TrackerSettings(propose={"reach_every": 0})
     assert not recheck_reach(state, np.zeros(48), refit, raw, candidates, off)[2]
+    # candidates that say where they came from: the record says too
+    sourced = lambda pose: (*candidates(pose), ["unexplained", "proposal"])  # noqa: E731
+    _, changes, switched = recheck_reach(state, np.zeros(48), refit, raw, sourced, s)
+    assert switched and changes["reaches"][0]["from"] == "unexplained"
 
 
 def test_an_arm_in_plain_view_that_the_pose_leaves_unexplained_is_reached_for():
