@@ -54,6 +54,13 @@ def _class_proposals(pos, ok, name):
     return pos[ids][ok[ids]].reshape(-1, 3)
 
 
+def _end_at(body, pose, target, mid):
+    """``pose (48,)`` fitted to the joints ``target (15, 3)`` with joint ``mid`` left free."""
+    weights = np.ones(len(target))
+    weights[mid] = 0.0
+    return fit_joints(body, target, pose, weights=weights)
+
+
 def reach_candidates(body, pose, proposals, min_confidence: float, near: float = 0.1):
     """Poses with one limb re-fitted to a proposal of its end joint's class.
 
@@ -102,9 +109,7 @@ def reach_candidates(body, pose, proposals, min_confidence: float, near: float =
                 continue
             target = joints.copy()
             target[end] = p
-            weights = np.ones(len(joints))
-            weights[mid] = 0.0
-            out.append(fit_joints(body, target, pose, weights=weights))
+            out.append(_end_at(body, pose, target, mid))
             limbs.append(limb)
             for m in mids:
                 if (abs(np.linalg.norm(m - joints[root]) - upper) < REACH_SLACK
@@ -194,9 +199,7 @@ def blob_reach_candidates(body, pose, blobs, near: float = 0.1):
                 continue
             target = joints.copy()
             target[end] = p
-            weights = np.ones(len(joints))
-            weights[mid] = 0.0
-            out.append(fit_joints(body, target, pose, weights=weights))
+            out.append(_end_at(body, pose, target, mid))
             limbs.append(limb)
     return np.array(out).reshape(-1, len(pose)), limbs
 
