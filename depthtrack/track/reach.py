@@ -24,9 +24,8 @@ farthest from the limb's root within reach as one more end to reach to
 """
 from __future__ import annotations
 
-import numpy as np
-
 import cv2
+import numpy as np
 
 from ..contract import JOINT_INDEX
 from .energy import relative_lead
@@ -126,13 +125,13 @@ def unexplained_blobs(model_depth, person_depth, camera, min_pixels: int, gap: f
 
     Parameters
     ----------
-    model_depth : (T, T) float
+    model_depth : (H, W) float
         The pose rendered (camera z, metres), 0 where nothing is drawn.
-    person_depth : (T, T) float
+    person_depth : (H, W) float
         The person's observed depth on the same pixels, 0 elsewhere and where the camera
         read nothing.
     camera : Camera
-        Of those pixels (a tile's: :func:`depthtrack.render.tiles.tile_camera`).
+        Of those pixels.
     min_pixels : int
         Smaller blobs are left out.
     gap : float
@@ -148,15 +147,14 @@ def unexplained_blobs(model_depth, person_depth, camera, min_pixels: int, gap: f
     model = np.asarray(model_depth, dtype=np.float64)
     person = np.asarray(person_depth, dtype=np.float64)
     miss = (person > 0) & ((model <= 0) | (model > person + gap))
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(miss.astype(np.uint8), connectivity=8)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(miss.astype(np.uint8), connectivity=8)
     areas = stats[1:, cv2.CC_STAT_AREA]
     out = []
     for k in np.argsort(-areas, kind="stable")[:max_blobs] + 1:
         if stats[k, cv2.CC_STAT_AREA] < max(1, min_pixels):
             break
         v, u = np.nonzero(labels == k)
-        z = person[v, u]
-        out.append(np.stack([(u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z], axis=1))
+        out.append(camera.backproject(person[v, u], np.stack([u, v], axis=1)))
     return out
 
 

@@ -345,7 +345,7 @@ class ProposalSettings:
     (:mod:`.reach`: a hand or foot tracked far from where it is, which the association's
     pruning never brings back). ``reach_unexplained`` > 0 also offers each limb the farthest
     reachable point of each blob of the person's pixels the pose leaves unexplained that
-    holds at least that share of the person's pixels (on the polish's tiles; 0 = off):
+    holds at least that share of the person's pixels (on the full image; 0 = off):
     a limb tracked hidden while the real one is in plain view, with no proposal for it
     (0.02 on dev, 2026-11-29: worse on the whole, README "Reaching into what the pose
     leaves unexplained").
