@@ -140,3 +140,18 @@ def unexplained_blobs_of(model, person, camera):
     from depthtrack.track.reach import unexplained_blobs
 
     return unexplained_blobs(model, person, camera, 2)
+
+
+def test_a_limb_whose_lower_segment_hardly_shows_is_hidden():
+    from depthtrack.track.reach import hidden_limbs
+
+    names = BodyModel.default(mesh="decimated").joint_names
+    labels = np.full((10, 10), -1, np.int16)
+    labels[0:5, :] = names.index("l_elbow")              # 50 pixels of the left forearm
+    labels[5, 0:3] = names.index("r_wrist")               # 3 of the right hand
+    labels[6:8, :] = names.index("l_knee")                # 20 of the left shin
+    labels[8:10, :] = names.index("r_knee")               # 20 of the right shin, off the person
+    person = np.ones((10, 10), bool)
+    person[8:10, :] = False
+    assert hidden_limbs(labels, person, names, 10) == {"r_arm", "r_leg"}
+    assert hidden_limbs(labels, person, names, 60) == {"l_arm", "r_arm", "l_leg", "r_leg"}

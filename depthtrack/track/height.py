@@ -195,8 +195,10 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     if not s.trial_rechecks:
         settings = settings.updated(NO_RECHECKS)
     # the trial yields its frames as it goes: no pose held back for a re-track after a switch
-    # nor a final polish: the fit refines the trial's poses itself
-    settings = settings.updated({"heading": {"retro_frames": 0}, "polish": {"final_tile": 0}})
+    # nor a final polish: the fit refines the trial's poses itself; nor a reach into
+    # unexplained blobs, which the template's misfit makes of every limb
+    settings = settings.updated({"heading": {"retro_frames": 0}, "polish": {"final_tile": 0},
+                                 "propose": {"reach_unexplained": 0.0}})
     if segmenter is None:
         from ..detect import segment_foreground as segmenter
     t0 = time.perf_counter()

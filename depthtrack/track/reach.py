@@ -158,7 +158,36 @@ def unexplained_blobs(model_depth, person_depth, camera, min_pixels: int, gap: f
     return out
 
 
-def blob_reach_candidates(body, pose, blobs, near: float = 0.1):
+def hidden_limbs(labels, person, joint_names, min_pixels: int) -> set:
+    """The limbs whose lower segment (forearm and hand, shin and foot) shows on fewer than
+    ``min_pixels`` of the person's pixels: hidden behind the body or off the person.
+
+    Parameters
+    ----------
+    labels : (H, W) int
+        The pose's part labels (:meth:`depthtrack.render.FrameRenderer.render_labels`:
+        index into ``joint_names``, -1 none).
+    person : (H, W) bool
+        The person's pixels.
+    joint_names : sequence of str
+    min_pixels : int
+
+    Returns
+    -------
+    set of str
+        :data:`LIMBS` keys.
+    """
+    labels = np.asarray(labels)[np.asarray(person, bool)]
+    index = {n: i for i, n in enumerate(joint_names)}
+    out = set()
+    for limb, (_, mid, end) in LIMBS.items():
+        shown = np.count_nonzero((labels == index[mid]) | (labels == index[end]))
+        if shown < min_pixels:
+            out.add(limb)
+    return out
+
+
+def blob_reach_candidates(body, pose, blobs, near: float = 0.1, limbs_free=None):
     """Poses with one limb re-fitted to reach into an unexplained blob.
 
     Parameters
@@ -169,6 +198,8 @@ def blob_reach_candidates(body, pose, blobs, near: float = 0.1):
         :func:`unexplained_blobs`.
     near : float
         As in :func:`reach_candidates`.
+    limbs_free : set of str or None
+        Only these limbs reach (:func:`hidden_limbs`); None: every limb.
 
     Returns
     -------
@@ -184,6 +215,8 @@ def blob_reach_candidates(body, pose, blobs, near: float = 0.1):
     rest = np.asarray(body.joint_positions(np.zeros(len(pose))))
     out, limbs = [], []
     for limb, names in LIMBS.items():
+        if limbs_free is not None and limb not in limbs_free:
+            continue
         root, mid, end = (JOINT_INDEX[n] for n in names)
         length = float(np.linalg.norm(rest[mid] - rest[root]) + np.linalg.norm(rest[end] - rest[mid]))
         both_ends = joints[_class_ids(names[2])]

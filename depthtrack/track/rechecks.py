@@ -17,7 +17,8 @@ from .energy import fixed_energy
 from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
 from .proposals import frame_proposals
-from .reach import blob_reach_candidates, reach_candidates, recheck_reach, unexplained_blobs
+from .reach import (blob_reach_candidates, hidden_limbs, reach_candidates, recheck_reach,
+                    unexplained_blobs)
 from .reseat import limb_climber, limb_library, recheck_reseat
 from .search import climb
 from .start import global_search, start_up, wrong_side
@@ -98,9 +99,13 @@ def reach_all(tracker, frame, pose):
     if s.reach_unexplained > 0:
         mask = frame.foreground.mask
         person = np.where(mask, frame.depth, 0.0)
-        blobs = unexplained_blobs(tracker.renderers.depth(pose), person, tracker.camera,
-                                  int(np.ceil(s.reach_unexplained * np.count_nonzero(mask))))
-        more, more_limbs = blob_reach_candidates(tracker.body, pose, blobs)
+        least = int(np.ceil(s.reach_unexplained * np.count_nonzero(mask)))
+        blobs = unexplained_blobs(tracker.renderers.depth(pose), person, tracker.camera, least)
+        free = None
+        if blobs and s.reach_hidden_only:
+            free = hidden_limbs(tracker.renderers.labels(pose), mask,
+                                tracker.renderers.body.joint_names, least)
+        more, more_limbs = blob_reach_candidates(tracker.body, pose, blobs, limbs_free=free)
         poses = np.concatenate([poses, more]) if len(more) else poses
         limbs, sources = limbs + more_limbs, sources + ["unexplained"] * len(more_limbs)
     return poses, limbs, sources

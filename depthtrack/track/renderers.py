@@ -92,10 +92,19 @@ class RendererSet:
 
     def depth(self, pose) -> np.ndarray:
         """(H, W) float: camera z of ``pose (48,)`` over the full image, 0 where it is not (one GL render)."""
+        return self._full_frame().render(self.body, np.asarray(pose))
+
+    def labels(self, pose) -> np.ndarray:
+        """(H, W) int16: the joint (index into the body's ``joint_names``) whose bone shows
+        at each pixel of the full image, -1 where none (one GL render)."""
+        return self._full_frame().render_labels(self.body, np.asarray(pose))
+
+    def _full_frame(self):
+        """The full-image renderer, made on first use and owned by the set."""
         if self._frame is None:
             from ..render import FrameRenderer
             self._frame = FrameRenderer(self.camera)
-        return self._frame.render(self.body, np.asarray(pose))
+        return self._frame
 
     def release(self) -> None:
         """Free every GL object of the set (idempotent)."""

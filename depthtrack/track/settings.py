@@ -348,7 +348,8 @@ class ProposalSettings:
     holds at least that share of the person's pixels (on the full image; 0 = off):
     a limb tracked hidden while the real one is in plain view, with no proposal for it
     (0.02 on dev, 2026-11-29: worse on the whole, README "Reaching into what the pose
-    leaves unexplained").
+    leaves unexplained"); with ``reach_hidden_only`` only a limb whose forearm and hand
+    (shin and foot) show on fewer pixels than that share may reach so.
     """
 
     enabled: bool = True
@@ -366,9 +367,10 @@ class ProposalSettings:
     reach_every: int = 2
     reach_margin: float = 0.03
     reach_unexplained: float = 0.0
+    reach_hidden_only: bool = False
 
     def __post_init__(self):
-        for name in ("enabled", "evidence"):
+        for name in ("enabled", "evidence", "reach_hidden_only"):
             _check(isinstance(getattr(self, name), bool),
                    f"ProposalSettings.{name} must be true or false, not {getattr(self, name)!r}")
         object.__setattr__(self, "evidence_joints", tuple(self.evidence_joints))
