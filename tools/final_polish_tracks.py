@@ -24,6 +24,7 @@ sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
+from depthtrack.io.atomic import write_text_atomic  # noqa: E402
 from depthtrack.evaluate.runs import score  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
 from depthtrack.track.final_polish import FinalPolish  # noqa: E402
@@ -77,7 +78,7 @@ def main(argv=None) -> int:
               f"{f['median_depth_residual_m'] * 100:.2f} cm")
     print(f"{out['seconds_per_frame']:.2f} s and {out['candidates_per_frame']:.0f} candidates a frame")
     if args.json:
-        args.json.write_text(json.dumps(out, indent=1), encoding="utf-8")
+        write_text_atomic(args.json, json.dumps(out, indent=1) + "\n")
     return 0
 
 

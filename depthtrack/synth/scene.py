@@ -105,7 +105,7 @@ class Placement:
     floor_y: float
     wall_distance: float
     in_view: float
-    visible: float = 1.0
+    visible: float
 
     def to_dict(self) -> dict:
         return {"world_to_camera": np.round(self.world_to_camera, 6).tolist(),
