@@ -145,6 +145,14 @@ class StartSettings:
         two (bend seeds 1 and 3: 10 -> 3 cm at the start) and their tracks 100 -> 98.3 and
         100 -> 100 %, so it missed the rule (paired difference at least 0) and is not the
         default. README, "Bent bodies".
+    reseat_rounds : int
+        After an automatic start's search, up to this many limbs re-seated in turn from the
+        limb library (:func:`~.reseat.reseat_limbs`: every limb set to each of its 32 poses,
+        the best climbed over that limb, kept when lower by
+        :attr:`HeadingSettings.reseat_margin` as the re-seat recheck's are); the start's
+        ``init_info`` lists them (``reseats``). The search's six arm poses can leave an arm
+        in a basin the climb does not leave (dev: 01_08 on SR4000 from 270 degrees, both
+        arms started overhead while they hang in front of the trunk). 0 (the default) = off.
     """
 
     passes: int = 3
@@ -172,6 +180,7 @@ class StartSettings:
     bend_margin: float = 0.01
     bend_gate: float = 0.25
     bend_hip_angle: float = 0.0
+    reseat_rounds: int = 0
 
     def __post_init__(self):
         _check(0.0 <= self.complete_fraction <= 1.0, f"StartSettings.complete_fraction must "
@@ -188,7 +197,7 @@ class StartSettings:
         _positive(self, "passes", "step_factor", "max_iterations", "shortlist", "root_blocks",
                   "root_passes", "finalists", "bend_shortlist", "bend_finalists")
         _positive(self, "facing_prior", "extra_levels", "associate_level", "centre_push",
-                  "bend_margin", allow_zero=True)
+                  "bend_margin", "reseat_rounds", allow_zero=True)
         _check(0.0 <= self.facing_margin < 90.0, f"StartSettings.facing_margin must be in "
                                                  f"[0, 90) degrees, not {self.facing_margin}")
         object.__setattr__(self, "axial_shifts", tuple(float(s) for s in self.axial_shifts))

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
-from .energy import Energy, unexplained
+from .energy import Energy, fixed_energy, unexplained
 from .evidence import PartModel
 from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
@@ -49,6 +49,7 @@ from .propagate import associate_stage, evidence_parts
 from .rechecks import recheck_stage, turned_start
 from .record import Recorder
 from .renderers import RendererSet
+from .reseat import limb_climber, limb_library, reseat_limbs
 from .search import Climbers, polish, predict, search
 from .settings import TrackerSettings
 from .start import global_search
@@ -213,6 +214,8 @@ class Tracker:
             x, e, info = global_search(self, energy, frame,
                                        legs=self.settings.start.legs == "always",
                                        bends=self.settings.start.bends in ("start", "always"))
+            if self.settings.start.reseat_rounds:
+                x, e, info["reseats"] = self._reseat_start(energy, x, e)
             info = {"mode": "automatic", **info, "energy": float(e)}
         state = state.logged({"energy": e, "cost": unexplained(energy, x)}, pose=x,
                              velocity=np.zeros(self.body.dof), init_info=info,
@@ -221,6 +224,15 @@ class Tracker:
         if not self.recorder.initialised():
             self.recorder.count("reinitialisations")
         return state, frame, x.copy()
+
+    def _reseat_start(self, energy, x, e):
+        """The automatic start's limbs re-seated (:attr:`StartSettings.reseat_rounds`,
+        :func:`.reseat.reseat_limbs`): ``(pose (48,), energy, events)``."""
+        s = self.settings
+        climb_limb = limb_climber(energy, self.climbers.start, self.recorder, s.heading.refit_level)
+        floor = fixed_energy(energy) if s.heading.margins_over == "explainable" else 0.0
+        return reseat_limbs(x, e, energy, climb_limb, limb_library(), s.start.reseat_rounds,
+                            s.heading.reseat_margin, s.heading.reseat_climbs, self.body.clip, floor)
 
     def advance(self, state, depth):
         """Track one frame from ``state``; returns ``(state, pose (48,) or None)``.
