@@ -9,7 +9,7 @@ from depthtrack.io import open_sequence
 from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
 from depthtrack.track.reseat import (LIMB_SLOTS, MIRROR, limb_library, recheck_reseat,
-                                     reseat_candidates)
+                                     reseat_candidates, reseat_limbs)
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
@@ -90,6 +90,38 @@ def test_the_recheck_takes_a_reseated_limb_only_on_a_clear_lead_and_when_due():
     assert recheck_reseat(state, pose, refit, energy, climb_limb, lib, strict)[2] is False
     with pytest.raises(ValueError, match="reseat_climbs"):
         TrackerSettings(heading={"reseat_climbs": 0})
+
+
+def test_the_start_reseats_limbs_in_turn_while_each_gains_by_the_margin():
+    """reseat_limbs (StartSettings.reseat_rounds) on a toy energy: both arms off their
+    targets; each round re-seats the limb that gains most, and stops at the first round
+    whose best re-seat is under the margin."""
+    lib = {"arm": np.array([[0.0] * 6, [-1.4, 0.0, 0.0, -0.5, 0.0, 0.0], [0.6, 0.0, 0.0, 0.0, 0.0, 0.0]]),
+           "leg": np.array([[0.0] * 6])}
+    right, left = lib["arm"][1] * MIRROR, lib["arm"][2]
+
+    def energy(poses):
+        p = np.atleast_2d(poses)
+        return (100.0 + 2.0 * np.abs(p[:, LIMB_SLOTS["r_arm"]] - right).sum(axis=1)
+                + np.abs(p[:, LIMB_SLOTS["l_arm"]] - left).sum(axis=1))
+
+    climb_limb = lambda pose, limb: (pose, float(energy(pose)[0]))       # noqa: E731
+    pose = np.zeros(48)
+    e0 = float(energy(pose)[0])                                          # 100 + 3.8 + 0.6
+    x, e, events = reseat_limbs(pose, e0, energy, climb_limb, lib, rounds=3, margin=0.0)
+    assert [ev["limb"] for ev in events] == ["r_arm", "l_arm"]           # the larger gain first
+    np.testing.assert_allclose(x[LIMB_SLOTS["r_arm"]], right)
+    np.testing.assert_allclose(x[LIMB_SLOTS["l_arm"]], left)
+    assert e == pytest.approx(100.0) and events[0]["energy_kept"] == pytest.approx(e0, abs=0.05)
+    # one round: one limb; a margin above the second limb's gain (0.6 of ~100.6) stops there
+    assert len(reseat_limbs(pose, e0, energy, climb_limb, lib, rounds=1, margin=0.0)[2]) == 1
+    assert len(reseat_limbs(pose, e0, energy, climb_limb, lib, rounds=3, margin=0.01)[2]) == 1
+    # nothing gains: the pose comes back as it was
+    y, e_y, none = reseat_limbs(x, e, energy, climb_limb, lib, rounds=3, margin=0.0)
+    assert none == [] and e_y == e and np.array_equal(y, x)
+    assert TrackerSettings().start.reseat_rounds == 0                    # off by default
+    with pytest.raises(ValueError, match="reseat_rounds"):
+        TrackerSettings(start={"reseat_rounds": -1})
 
 
 def test_an_arm_held_behind_the_back_is_reseated_while_tracking(squat):

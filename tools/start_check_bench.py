@@ -8,7 +8,7 @@ motion prior per foreground pixel) and the fraction of joints within 10 cm of th
 those frames. Then, per rule, how often the kept hypothesis was clearly worse (by
 ``--clear`` of joints within 10 cm) than the other.
 
-    .venv/bin/python tools/start_check_bench.py SEQ [SEQ ...] [--method hc+ep] [--json OUT.jsonl]
+    .venv/bin/python tools/start_check_bench.py SEQ [SEQ ...] [--method hc+ep] [--frames N] [--json OUT.jsonl]
 
 The sequences: any with ground truth, e.g. ``tools/benchmark.py --split dev --wide
 --keep-tracks``'s ``OUT/dev/sequences/*``. Tracked without the shape fit.
@@ -54,14 +54,16 @@ def start_both_ways(tracker, seq, follow: int):
     return i, state, {"initial": state.pose, "turned": tracker.turned_start(frame)(state.pose)}
 
 
-def start_hypotheses(path, method: str = "hc+ep") -> dict | None:
+def start_hypotheses(path, method: str = "hc+ep", frames: int | None = None) -> dict | None:
     """Both hypotheses of the start check on one sequence: ``{"name", "frame", "initial",
     "turned"}``, each hypothesis ``{"unexplained", "energy", "within_10cm"}`` (None when
-    its track was dropped); None when no frame has a person or too few frames follow."""
+    its track was dropped); None when no frame has a person or too few frames follow.
+    ``frames``: track each through this many frames instead of the check's own
+    (``HeadingSettings.frames``), to see whether a longer check would decide better."""
     seq = open_sequence(path)
     body = BodyModel.default(height=seq.subject_height or 1.75)
     settings = TrackerSettings(shape={"enabled": False})
-    K = settings.heading.frames
+    K = int(frames) if frames else settings.heading.frames
     with Tracker(body, seq.camera, fps=seq.fps, settings=settings, method=method) as t:
         started = start_both_ways(t, seq, K)
         if started is None:
@@ -109,10 +111,13 @@ def main(argv=None) -> int:
                         help="a kept heading counts as wrong when the other had this much more "
                              "of the joints within 10 cm (default 0.2)")
     parser.add_argument("--json", help="also write each sequence's result, a JSON line each")
+    parser.add_argument("--frames", type=int, default=None,
+                        help="track each hypothesis through this many frames (default: the "
+                             "check's own, HeadingSettings.frames)")
     args = parser.parse_args(argv)
     results = []
     for n, path in enumerate(args.sequences, 1):
-        r = start_hypotheses(path, args.method)
+        r = start_hypotheses(path, args.method, args.frames)
         if r is None:
             print(f"[{n}/{len(args.sequences)}] {path}: no start", flush=True)
             continue
