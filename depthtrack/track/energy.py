@@ -153,6 +153,13 @@ def fixed_energy(energy) -> float:
     return float(energy.weight * fixed)
 
 
+def margin_floor(energy, margins_over: str) -> float:
+    """The floor the rechecks' relative margins are taken over
+    (:attr:`~.heading_settings.HeadingSettings.margins_over`): :func:`fixed_energy` of
+    ``energy`` with ``"explainable"``, else 0 (a fraction of the whole energy)."""
+    return fixed_energy(energy) if margins_over == "explainable" else 0.0
+
+
 def relative_lead(e_kept, e_new, floor: float = 0.0) -> float:
     """How much lower ``e_new`` is than ``e_kept``, as a fraction of ``e_kept - floor``
     (``floor``: :func:`fixed_energy`, or 0 for a fraction of the whole energy); > 0 when

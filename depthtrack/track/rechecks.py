@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .energy import fixed_energy
+from .energy import margin_floor
 from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
                       recheck_limb_sides, swapped_twins, turned_pose)
 from .proposals import frame_proposals
@@ -39,7 +39,7 @@ def recheck_stage(tracker, state, energy, frame, x):
     s, recorder = tracker.settings, tracker.recorder
     bare = energy.without_prior().on(tracker.renderers.at_tile(s.heading.recheck_tile))
     fitted = {}                          # the tracked pose is climbed once for every recheck
-    floor = fixed_energy(bare) if s.heading.margins_over == "explainable" else 0.0
+    floor = margin_floor(bare, s.heading.margins_over)
 
     def refit(pose):
         key = np.asarray(pose, dtype=np.float64).tobytes()

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
-from .energy import Energy, fixed_energy, unexplained
+from .energy import Energy, margin_floor, unexplained
 from .evidence import PartModel
 from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
@@ -230,7 +230,7 @@ class Tracker:
         :func:`.reseat.reseat_limbs`): ``(pose (48,), energy, events)``."""
         s = self.settings
         climb_limb = limb_climber(energy, self.climbers.start, self.recorder, s.heading.refit_level)
-        floor = fixed_energy(energy) if s.heading.margins_over == "explainable" else 0.0
+        floor = margin_floor(energy, s.heading.margins_over)
         return reseat_limbs(x, e, energy, climb_limb, limb_library(), s.start.reseat_rounds,
                             s.heading.reseat_margin, s.heading.reseat_climbs, self.body.clip, floor)
 
