@@ -166,6 +166,36 @@ def test_the_judge_compares_the_climbed_poses_and_the_setting_reaches_it():
         TrackerSettings(heading={"judge_tile": 100})
 
 
+def test_a_close_call_is_judged_again_polished_and_a_clear_one_is_not():
+    """``HeadingSettings.polish_within``: where the judged lead is above minus the band,
+    both poses are polished and judged again, and the polished twin is what takes over;
+    where the twin trails by more than the band, nothing is polished."""
+    s = TrackerSettings(heading={"polish_within": 0.05})
+    h = s.heading
+    state = TrackingState(log=({},) * h.every, heading_votes=h.votes - 1)
+    twin = lambda pose: pose + 1.0                      # noqa: E731
+    tie = lambda pose: (pose + 0.5, 200.0)              # noqa: E731
+    polished = []
+
+    def polish(poses):                                  # the polished twin 0.2 / px lower
+        polished.append(np.asarray(poses)[:, 0].tolist())
+        return np.asarray(poses) + 0.25, np.array([300.0, 100.0])
+
+    def judge_by(lead):                                 # the twin's judged lead per pixel
+        return lambda poses: np.array([200.0, 200.0 - 1000.0 * lead])
+
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s,
+                                           judge=judge_by(-0.01), polish=polish)
+    assert polished == [[0.5, 1.5]] and switched and (x == 1.75).all()
+    assert changes["heading_switches"][0]["energy_turned"] == 100.0
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s,
+                                           judge=judge_by(-0.08), polish=polish)
+    assert len(polished) == 1 and not switched and changes["heading_votes"] == 0
+    assert TrackerSettings().heading.polish_within == 0.0
+    with pytest.raises(ValueError, match="polish_within"):
+        TrackerSettings(heading={"polish_within": -0.1})
+
+
 def test_small_steady_leads_add_up_and_mixed_ones_cancel():
     """The CUSUM: leads below the vote margin switch once their sum passes the threshold;
     leads of either sign (a frontal view) never do."""

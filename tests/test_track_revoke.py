@@ -42,9 +42,10 @@ def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkey
     wrong_on = 4                         # the recheck's first turn (every 4)
     real = rechecks.recheck_heading
 
-    def switching_on_one_frame(state, pose, refit, twins, pixels, settings, judge=None):
+    def switching_on_one_frame(state, pose, refit, twins, pixels, settings, judge=None,
+                               polish=None):
         if state.frame != wrong_on or not settings.heading.every:
-            return real(state, pose, refit, twins, pixels, settings, judge)
+            return real(state, pose, refit, twins, pixels, settings, judge, polish)
         twin, _ = refit(np.asarray(twins(pose)).reshape(-1, len(pose))[0])
         switch = {"frame": state.frame, "energy_kept": 0.0, "energy_turned": 0.0,
                   "by": "injected", "evidence": 0.0}

@@ -23,7 +23,6 @@ import math
 
 import numpy as np
 
-from .hill_climb import HillClimber
 from .observe import as_depth, observe
 from .loop import stream_poses
 
@@ -55,11 +54,7 @@ class FinalPolish:
 
     def __init__(self, tracker):
         self.tracker = tracker
-        s = tracker.settings
-        self.climber = HillClimber(blocks=tracker.climbers.frame.blocks,
-                                   levels=s.search.levels + s.polish.final_levels,
-                                   max_iterations=s.polish.final_iterations,
-                                   clip=tracker.body.clip)
+        self.climber = tracker.climbers.final
         self._renderers = {}
 
     def __enter__(self):

@@ -226,7 +226,8 @@ def settle_heading(start, depths, track, turn, settings):
     return state.replace(init_info=info), poses
 
 
-def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings, judge=None):
+def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings, judge=None,
+                    polish=None):
     """The heading recheck of one frame (module docstring): keep ``pose`` or its turned twin.
 
     Parameters
@@ -248,6 +249,10 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     judge : callable ``(poses (2, 48)) -> (2,)``, optional
         The energies the two climbed hypotheses are compared by, when not the climbs' own
         (:attr:`HeadingSettings.judge_tile`: the same energy on finer tiles).
+    polish : callable ``(poses (2, 48)) -> (poses (2, 48), energies (2,))``, optional
+        With ``judge``, a close call's two poses polished and judged again
+        (:attr:`HeadingSettings.polish_within`); the polished twin is the one that may take
+        over.
 
     Returns
     -------
@@ -265,6 +270,9 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     y, e_twin = min(fits, key=lambda f: float(f[1]))
     if judge is not None:
         e_pose, e_twin = (float(e) for e in judge(np.stack([kept, y])))
+        if polish is not None and (e_pose - e_twin) / max(pixels, 1.0) > -h.polish_within:
+            (kept, y), energies = polish(np.stack([kept, y]))
+            e_pose, e_twin = (float(e) for e in energies)
     lead = (e_pose - float(e_twin)) / max(pixels, 1.0)
     evidence = max(0.0, state.heading_evidence + lead - h.evidence_drift)
     votes = state.heading_votes + 1 if lead > h.recheck_margin else 0

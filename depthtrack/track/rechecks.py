@@ -53,10 +53,11 @@ def recheck_stage(tracker, state, energy, frame, x):
 
     def judge(poses):                    # asked for only where the recheck runs
         return tracker.judge_energy()(poses)
+    polish = close_call_polish(tracker) if judge_tile and s.heading.polish_within > 0 else None
     with recorder.timed("heading"):
         y, changes, turned = recheck_heading(
             state, x, refit, lambda pose: recheck_twins(tracker.body, s, bare, pose), pixels, s,
-            judge=judge if judge_tile else None)
+            judge=judge if judge_tile else None, polish=polish)
         if turned:
             return y, changes, "heading"
         y, more, swapped = recheck_limb_sides(
@@ -85,6 +86,19 @@ def recheck_stage(tracker, state, energy, frame, x):
     if taken is None:
         return x, changes, None
     return taken, {**changes, **more}, "search"
+
+
+def close_call_polish(tracker):
+    """``poses (K, 48) -> (poses (K, 48), energies (K,))``: each pose climbed by the final
+    polish's climber (:attr:`~.search.Climbers.final`, from the search's finest rung) on the
+    heading recheck's judge energy (:meth:`~.tracker.Tracker.judge_energy`), and its energy
+    there (:attr:`HeadingSettings.polish_within`)."""
+    def run(poses):
+        energy = tracker.judge_energy()
+        fits = [climb(energy, tracker.climbers.final, p, tracker.recorder,
+                      level_offset=tracker.settings.search.levels - 1) for p in poses]
+        return np.stack([f[0] for f in fits]), np.array([float(f[1]) for f in fits])
+    return run
 
 
 def reach_all(tracker, frame, pose):

@@ -30,11 +30,17 @@ class Climbers:
     start : HillClimber
         The global search (first frame, lost track): it starts far off, so its steps are
         :attr:`StartSettings.step_factor` times larger, with more rungs and iterations.
+    final : HillClimber
+        The final polish (:mod:`.final_polish`) and the heading recheck's polish of a close
+        call (:attr:`HeadingSettings.polish_within`): the per-frame blocks with
+        :attr:`PolishSettings.final_levels` finer rungs, climbed from the search's finest
+        (``level_offset = SearchSettings.levels - 1``).
     """
 
     frame: HillClimber
     fine: HillClimber
     start: HillClimber
+    final: HillClimber
 
     @classmethod
     def build(cls, settings, fps: float, clip=None) -> "Climbers":
@@ -48,7 +54,9 @@ class Climbers:
                              max_iterations=settings.polish.fine_iterations, clip=clip),
             start=HillClimber(blocks=default_blocks(g.step_factor * step_scale, g.diagonals),
                               levels=s.levels + g.extra_levels, max_iterations=g.max_iterations,
-                              clip=clip))
+                              clip=clip),
+            final=HillClimber(blocks=blocks, levels=s.levels + settings.polish.final_levels,
+                              max_iterations=settings.polish.final_iterations, clip=clip))
 
 
 def climb(energy, climber, pose, recorder, start_energy=None, blocks=None, passes: int = 1,
