@@ -191,6 +191,14 @@ def test_a_close_call_is_judged_again_polished_and_a_clear_one_is_not():
     x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s,
                                            judge=judge_by(-0.08), polish=polish)
     assert len(polished) == 1 and not switched and changes["heading_votes"] == 0
+    # "both": a clear lead for the twin is left as judged, a close one either way polished
+    both = TrackerSettings(heading={"polish_within": 0.05, "polish_side": "both"})
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, both,
+                                           judge=judge_by(0.08), polish=polish)
+    assert len(polished) == 1 and switched and (x == 1.5).all()
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, both,
+                                           judge=judge_by(0.03), polish=polish)
+    assert len(polished) == 2 and switched and (x == 1.75).all()
     assert TrackerSettings().heading.polish_within == 0.0
     with pytest.raises(ValueError, match="polish_within"):
         TrackerSettings(heading={"polish_within": -0.1})

@@ -270,7 +270,7 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     y, e_twin = min(fits, key=lambda f: float(f[1]))
     if judge is not None:
         e_pose, e_twin = (float(e) for e in judge(np.stack([kept, y])))
-        if polish is not None and (e_pose - e_twin) / max(pixels, 1.0) > -h.polish_within:
+        if polish is not None and close_call((e_pose - e_twin) / max(pixels, 1.0), h):
             (kept, y), energies = polish(np.stack([kept, y]))
             e_pose, e_twin = (float(e) for e in energies)
     lead = (e_pose - float(e_twin)) / max(pixels, 1.0)
@@ -286,6 +286,16 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     return np.asarray(y, dtype=np.float64), {
         "heading_votes": 0, "heading_evidence": 0.0,
         "heading_switches": state.heading_switches + (switch,)}, True
+
+
+def close_call(lead: float, heading) -> bool:
+    """Whether the heading recheck's judged ``lead`` (per foreground pixel, positive: the
+    twin's) is a close call to polish (:attr:`HeadingSettings.polish_within`,
+    ``polish_side``): above ``-polish_within`` (``"above"``), or within ``polish_within``
+    of zero (``"both"``: a clear lead either way is left as judged)."""
+    if heading.polish_side == "both":
+        return abs(lead) < heading.polish_within
+    return lead > -heading.polish_within
 
 
 #: The limb twins of the sides recheck (:func:`recheck_limb_sides`): name -> joint order.

@@ -24,6 +24,8 @@ RETRO_TAKES = ("all", "prefix")
 RETRO_STOPS = ("any", "rank")
 #: Which heading switches their re-track takes back (:attr:`HeadingSettings.retro_revoke`).
 RETRO_REVOKES = ("never", "refused", "unsupported", "outscored")
+#: Which judged leads are close calls (:attr:`HeadingSettings.polish_side`).
+POLISH_SIDES = ("above", "both")
 #: What the rechecks' relative margins are fractions of (:attr:`HeadingSettings.margins_over`).
 MARGIN_BASES = ("energy", "explainable")
 #: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
@@ -130,12 +132,23 @@ class HeadingSettings:
     foreground pixel above ``-polish_within`` -- is judged again after both climbed poses
     are polished on the judge's tiles (:attr:`Climbers.final`: the final polish's climber,
     from the search's finest rung); the polished twin is the one that may take over (0 =
-    off). A twin fitted to a track's joints has its far limbs where the track hid its own,
-    and the climb on 64-pixel tiles leaves the centimetres the judge's tiles see: replayed
+    off). Both were climbed on the tracker's 64-pixel tiles, which blur the centimetres the
+    judge's tiles see (a chest against a back): replayed
     on the dev parity tracks held back to front from the side and from behind, the twin
     (within 10 cm of the truth on 73 to 100 % of its joints) led on 5 to 9 of 12 rechecks
     before the polish and on 8 to 12 after it, while on three tracks facing the right way
-    the polished twin led once in 36. Two polishes per close call.
+    the polished twin led once in 36. Two polishes per close call. Off: on dev it put those
+    three right (20.9 -> 93.6, 26.8 -> 93.6, 20.4 -> 98.1 %) and lost overhead seed 3 (Azure
+    NFOV from 240 degrees), 98.5 -> 20.0 %, whose right switch the default made by a summed
+    evidence of 0.1165 and the polished leads, smaller, never made; with ``retro_revoke``
+    "outscored" it also lost overhead seed 1, whose polished right switches the revoke took
+    back (README, "A close front/back call, polished").
+
+    ``polish_side``: which judged leads ``polish_within`` takes for close calls
+    (:data:`POLISH_SIDES`, :func:`.heading.close_call`): ``"above"``, every lead above
+    ``-polish_within`` (the measurement above); ``"both"``, only those within
+    ``polish_within`` of zero, a clear lead for the twin left as judged (the polish shrank
+    overhead seed 3's first lead, +0.114 -> +0.039 per pixel in the replay).
 
     ``judge_start``: with ``judge_tile``, a start check whose two tracks came out within the
     margin of each other (``heading_check.ambiguous``) is decided by their mean energy per
@@ -277,6 +290,7 @@ class HeadingSettings:
     judge_tile: int = 256
     judge_start: bool = False
     polish_within: float = 0.0
+    polish_side: str = "above"
     reseat_every: int = 0
     reseat_margin: float = 0.01
     reseat_climbs: int = 1
@@ -292,6 +306,7 @@ class HeadingSettings:
     def __post_init__(self):
         _one_of(self, "start_by", START_SCORES)
         _one_of(self, "margins_over", MARGIN_BASES)
+        _one_of(self, "polish_side", POLISH_SIDES)
         _one_of(self, "start_twin", START_TWINS)
         _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
