@@ -32,7 +32,7 @@ from depthtrack.track import TrackerSettings  # noqa: E402
 from depthtrack.track.rechecks import close_call_polish, recheck_twins  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
-from track_replay import frame_energy, read_track, track_parser  # noqa: E402
+from track_replay import frame_energy, parse_frames, read_track, track_parser  # noqa: E402
 
 
 def within(body, pose, truth) -> float:
@@ -55,10 +55,7 @@ def main(argv=None) -> int:
             n = len(np.load(args.track / "poses.npz")["poses"])
             frames = list(range(h.every, n, h.every))
         else:
-            try:
-                frames = [int(f) for f in args.frames.split(",")]
-            except ValueError:
-                raise InputError(None, f"frames must be comma-separated integers, not {args.frames!r}")
+            frames = parse_frames(args.frames)
         seq, body, poses = read_track(args.seq, args.track, frames)
     except (InputError, OSError, KeyError) as exc:
         print(f"heading_polish: {exc}", file=sys.stderr)

@@ -33,7 +33,7 @@ from depthtrack.track.heading import (facing_direction, fit_joints, limb_swapped
 from depthtrack.track.energy import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
-from track_replay import frame_energy, read_track, track_parser  # noqa: E402
+from track_replay import frame_energy, parse_frames, read_track, track_parser  # noqa: E402
 
 TILES = (64, 128, 256)
 
@@ -48,17 +48,13 @@ def main(argv=None) -> int:
                              "front/back twin")
     args = parser.parse_args(argv)
     try:
-        try:
-            frames = [int(f) for f in args.frames.split(",")]
-        except ValueError:
-            raise InputError(None, f"frames must be comma-separated integers, not {args.frames!r}")
-        seq, body, poses = read_track(args.seq, args.track, frames)
+        seq, body, poses = read_track(args.seq, args.track, parse_frames(args.frames))
     except (InputError, OSError, KeyError) as exc:
         print(f"heading_tiles: {exc}", file=sys.stderr)
         return 2
     settings = TrackerSettings()
     with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=settings) as tr:
-        for f in frames:
+        for f in parse_frames(args.frames):
             truth = seq.joints[f]
             _, energy = frame_energy(tr, seq, poses, f)
 

@@ -31,6 +31,14 @@ def read_track(seq_dir: pathlib.Path, track_dir: pathlib.Path, frames):
     return seq, body, poses
 
 
+def parse_frames(text: str) -> list:
+    """``"F,F,..."`` as a list of ints; raises :class:`InputError` saying what it wanted."""
+    try:
+        return [int(f) for f in text.split(",")]
+    except ValueError:
+        raise InputError(None, f"frames must be comma-separated integers, not {text!r}") from None
+
+
 def frame_energy(tracker, seq, poses, f: int):
     """``(frame, energy)``: frame ``f`` observed as the track saw it (started on ``f - 1``'s
     pose, predicted from it) and its energy without the motion prior, on the tracker's tiles."""
