@@ -51,12 +51,9 @@ def main(argv=None) -> int:
     settings = TrackerSettings()
     h = settings.heading
     try:
-        if args.frames is None:
-            n = len(np.load(args.track / "poses.npz")["poses"])
-            frames = list(range(h.every, n, h.every))
-        else:
-            frames = parse_frames(args.frames)
-        seq, body, poses = read_track(args.seq, args.track, frames)
+        given = None if args.frames is None else parse_frames(args.frames)
+        seq, body, poses = read_track(args.seq, args.track, given or [])
+        frames = given or list(range(h.every, len(poses), h.every))
     except (InputError, OSError, KeyError) as exc:
         print(f"heading_polish: {exc}", file=sys.stderr)
         return 2
