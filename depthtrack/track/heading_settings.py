@@ -148,7 +148,10 @@ class HeadingSettings:
     (:data:`POLISH_SIDES`, :func:`.heading.close_call`): ``"above"``, every lead above
     ``-polish_within`` (the measurement above); ``"both"``, only those within
     ``polish_within`` of zero, a clear lead for the twin left as judged (the polish shrank
-    overhead seed 3's first lead, +0.114 -> +0.039 per pixel in the replay).
+    overhead seed 3's first lead, +0.114 -> +0.039 per pixel in the replay). A probe, not
+    adopted: it kept overhead seed 3 right and turned two right parity tracks wrong
+    (spin-fast from 90 degrees seed 2, 95.5 -> 46.4 %; from 180 degrees seed 1, 96.7 ->
+    20.1 %) on the clear wrong leads the ``"above"`` polish had shrunk.
 
     ``judge_start``: with ``judge_tile``, a start check whose two tracks came out within the
     margin of each other (``heading_check.ambiguous``) is decided by their mean energy per
