@@ -268,24 +268,55 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
     kept, e_pose = refit(pose)
     fits = [refit(t) for t in np.asarray(swapped_twin_of(pose)).reshape(-1, len(pose))]
     y, e_twin = min(fits, key=lambda f: float(f[1]))
+    polished = None                      # a polished close call: (twin, its energies)
     if judge is not None:
         e_pose, e_twin = (float(e) for e in judge(np.stack([kept, y])))
         if polish is not None and close_call((e_pose - e_twin) / max(pixels, 1.0), h):
-            (kept, y), energies = polish(np.stack([kept, y]))
-            e_pose, e_twin = (float(e) for e in energies)
+            (_, y_polished), energies = polish(np.stack([kept, y]))
+            polished = (y_polished, *(float(e) for e in energies))
+    if polished is not None and h.polish_evidence == "replace":
+        (y, e_pose, e_twin), polished = polished, None
     lead = (e_pose - float(e_twin)) / max(pixels, 1.0)
-    evidence = max(0.0, state.heading_evidence + lead - h.evidence_drift)
-    votes = state.heading_votes + 1 if lead > h.recheck_margin else 0
-    by_votes = votes >= h.votes
-    by_evidence = h.evidence_threshold > 0 and evidence > h.evidence_threshold
-    if not (by_votes or by_evidence):
-        return pose, {"heading_votes": votes, "heading_evidence": evidence}, False
-    switch = {"frame": state.frame, "energy_kept": round(e_pose, 1),
-              "energy_turned": round(float(e_twin), 1),
-              "by": "votes" if by_votes else "evidence", "evidence": round(evidence, 4)}
+    votes, evidence, by = _channel(state.heading_votes, state.heading_evidence, lead, h)
+    changes = {"heading_votes": votes, "heading_evidence": evidence}
+    from_polish = False
+    if h.polish_evidence == "separate":
+        # the polished leads' own votes and sum; the judged lead where no close call was polished
+        if polished is not None:
+            lead = (polished[1] - polished[2]) / max(pixels, 1.0)
+        p_votes, p_evidence, p_by = _channel(state.polished_votes, state.polished_evidence, lead, h)
+        changes.update(polished_votes=p_votes, polished_evidence=p_evidence)
+        if by is None and p_by is not None:
+            by, evidence, from_polish = p_by, p_evidence, True
+            if polished is not None:
+                y, e_pose, e_twin = polished
+    if by is None:
+        return pose, changes, False
+    switch = {"frame": state.frame, "energy_kept": round(float(e_pose), 1),
+              "energy_turned": round(float(e_twin), 1), "by": by,
+              "evidence": round(evidence, 4), **({"polished": True} if from_polish else {})}
     return np.asarray(y, dtype=np.float64), {
-        "heading_votes": 0, "heading_evidence": 0.0,
-        "heading_switches": state.heading_switches + (switch,)}, True
+        **CHANNELS_CLEARED, "heading_switches": state.heading_switches + (switch,)}, True
+
+
+#: The heading recheck's votes and sums, cleared when the track turns or starts again.
+CHANNELS_CLEARED = {"heading_votes": 0, "heading_evidence": 0.0,
+                    "polished_votes": 0, "polished_evidence": 0.0}
+
+
+def _channel(votes: int, evidence: float, lead: float, heading):
+    """One channel of the heading recheck's decision: ``(votes, evidence, by)`` after a
+    ``lead`` (per foreground pixel, positive: the twin's), ``by`` ``"votes"`` or
+    ``"evidence"`` when the twin takes over on it, else None (:class:`HeadingSettings`:
+    ``recheck_margin`` and ``votes``; Page's CUSUM with ``evidence_drift`` and
+    ``evidence_threshold``)."""
+    evidence = max(0.0, evidence + lead - heading.evidence_drift)
+    votes = votes + 1 if lead > heading.recheck_margin else 0
+    if votes >= heading.votes:
+        return votes, evidence, "votes"
+    if heading.evidence_threshold > 0 and evidence > heading.evidence_threshold:
+        return votes, evidence, "evidence"
+    return votes, evidence, None
 
 
 def close_call(lead: float, heading) -> bool:
@@ -426,8 +457,7 @@ def search_switch(state, e_pose: float, flipped, e_flipped: float, pixels: float
               "energy_turned": round(float(e_flipped), 1), "by": "search",
               "evidence": round(float(lead), 4)}
     return np.asarray(flipped, dtype=np.float64), {
-        "heading_votes": 0, "heading_evidence": 0.0,
-        "heading_switches": state.heading_switches + (switch,)}
+        **CHANNELS_CLEARED, "heading_switches": state.heading_switches + (switch,)}
 
 
 def recheck_by_search(state, pose, e_pose: float, search, pixels: float, settings):

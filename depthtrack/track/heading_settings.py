@@ -26,6 +26,10 @@ RETRO_STOPS = ("any", "rank")
 RETRO_REVOKES = ("never", "refused", "unsupported", "outscored")
 #: Which judged leads are close calls (:attr:`HeadingSettings.polish_side`).
 POLISH_SIDES = ("above", "both")
+#: What a polished close call's lead feeds (:attr:`HeadingSettings.polish_evidence`).
+POLISH_EVIDENCES = ("replace", "separate")
+#: Which switches a polished switch's re-track takes back (:attr:`HeadingSettings.polish_revoke`).
+POLISH_REVOKES = ("same",) + RETRO_REVOKES
 #: What the rechecks' relative margins are fractions of (:attr:`HeadingSettings.margins_over`).
 MARGIN_BASES = ("energy", "explainable")
 #: What the start's front/back check compares (``start_by``; :func:`.heading.settle_heading`).
@@ -152,6 +156,23 @@ class HeadingSettings:
     adopted: it kept overhead seed 3 right and turned two right parity tracks wrong
     (spin-fast from 90 degrees seed 2, 95.5 -> 46.4 %; from 180 degrees seed 1, 96.7 ->
     20.1 %) on the clear wrong leads the ``"above"`` polish had shrunk.
+
+    ``polish_evidence``: what a polished close call's lead feeds (:data:`POLISH_EVIDENCES`).
+    ``"replace"``: it stands for the judged lead in the one set of votes and CUSUM (the
+    figures above). ``"separate"``: the judged leads keep their own votes and sum, exactly
+    as without the polish, and the polished leads (the judged lead where no close call was
+    polished) build a second set (``polished_votes``, ``polished_evidence`` in the state);
+    the twin takes over when either crosses, the judged set first (its switch takes the
+    unpolished twin), the polished set's switch the polished twin, marked ``"polished":
+    true`` in ``heading_switches``. The polish then adds switches and takes none away: the
+    polish shrinks some right leads (overhead seed 3) and finds others (105_05 from 90
+    degrees).
+
+    ``polish_revoke``: the :data:`RETRO_REVOKES` rule for a switch made on polished leads
+    (:func:`.retrack.revoke_rule`; ``"same"``: ``retro_revoke``'s). ``"outscored"`` judges
+    the re-tracked frames unpolished, where from the side or behind the two headings'
+    energies are within 1 to 2 % of each other: it took back overhead seed 1's polished
+    right switches.
 
     ``judge_start``: with ``judge_tile``, a start check whose two tracks came out within the
     margin of each other (``heading_check.ambiguous``) is decided by their mean energy per
@@ -294,6 +315,8 @@ class HeadingSettings:
     judge_start: bool = False
     polish_within: float = 0.0
     polish_side: str = "above"
+    polish_evidence: str = "replace"
+    polish_revoke: str = "same"
     reseat_every: int = 0
     reseat_margin: float = 0.01
     reseat_climbs: int = 1
@@ -310,6 +333,8 @@ class HeadingSettings:
         _one_of(self, "start_by", START_SCORES)
         _one_of(self, "margins_over", MARGIN_BASES)
         _one_of(self, "polish_side", POLISH_SIDES)
+        _one_of(self, "polish_evidence", POLISH_EVIDENCES)
+        _one_of(self, "polish_revoke", POLISH_REVOKES)
         _one_of(self, "start_twin", START_TWINS)
         _positive(self, "frames", "min_frames", "margin", "every", "recheck_margin",
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",

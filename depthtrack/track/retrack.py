@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..body.facing import back_to_front, sides_exchanged
-from .heading import LIMB_SWAPS
+from .heading import CHANNELS_CLEARED, LIMB_SWAPS
 
 
 #: Which corrections :func:`new_correction` reports, first the one a frame's re-track
@@ -148,8 +148,9 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         # (a track given up on scores above the margin over the frames it reached)
         n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              better if h.retro_take == "prefix" else 0)
-        revoke = kind == "heading" and revokes(h.retro_revoke, n, better, len(indices),
-                                               outscored=e_back > e_forward)
+        revoke = kind == "heading" and revokes(
+            revoke_rule(h, corrected.heading_switches[-1]), n, better, len(indices),
+            outscored=e_back > e_forward)
         n = 0 if revoke else n
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
@@ -161,6 +162,18 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             held[where[index]] = (index, x)
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
     return revoke
+
+
+def revoke_rule(heading, switch: dict) -> str:
+    """The :data:`~.heading_settings.RETRO_REVOKES` rule that judges the heading ``switch``
+    (an entry of ``heading_switches``): :attr:`HeadingSettings.polish_revoke` for one made on
+    polished close calls (``"polished"`` in it), unless that is ``"same"``; else
+    :attr:`HeadingSettings.retro_revoke`. ``"outscored"`` judges the backward track by
+    unpolished energies, which from the side differ by 1-2 % between the two headings: a
+    switch the polish found is read at a finer grain than that."""
+    if switch.get("polished") and heading.polish_revoke != "same":
+        return heading.polish_revoke
+    return heading.retro_revoke
 
 
 def revokes(rule: str, taken: int, better: int, frames: int = 0,
@@ -251,6 +264,6 @@ def revoke_switch(tracker, held, before, depth, index: int) -> bool:
     if x is None:
         return False
     held[-1] = (index, x)
-    tracker.state = state.replace(heading_votes=0, heading_evidence=0.0,
+    tracker.state = state.replace(**CHANNELS_CLEARED,
                                   retracks=state.retracks + (entry,))
     return True

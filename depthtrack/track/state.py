@@ -47,6 +47,9 @@ class TrackingState:
         Frames in a row whose pose the recogniser's proposals disagree with (:mod:`.proposals`).
     heading_evidence : float
         The rechecks' accumulated evidence for the twin (a CUSUM, :func:`.heading.recheck_heading`).
+    polished_votes, polished_evidence : int, float
+        The same from the polished close calls' leads, with
+        :attr:`HeadingSettings.polish_evidence` ``"separate"`` (else 0).
     heading_switches : tuple of dict
         Each time a recheck replaced the track by its turned twin: ``frame``, energies.
     limb_swaps : tuple of dict
@@ -80,6 +83,8 @@ class TrackingState:
     recoveries: tuple = ()
     heading_votes: int = 0
     heading_evidence: float = 0.0
+    polished_votes: int = 0
+    polished_evidence: float = 0.0
     proposal_misses: int = 0
     heading_switches: tuple = ()
     limb_swaps: tuple = ()

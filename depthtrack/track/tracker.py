@@ -50,6 +50,7 @@ from .rechecks import recheck_stage, turned_start
 from .record import Recorder
 from .renderers import RendererSet
 from .reseat import limb_climber, limb_library, reseat_limbs
+from .heading import CHANNELS_CLEARED
 from .search import Climbers, polish, predict, search
 from .settings import TrackerSettings
 from .start import global_search
@@ -219,7 +220,7 @@ class Tracker:
             info = {"mode": "automatic", **info, "energy": float(e)}
         state = state.logged({"energy": e, "cost": unexplained(energy, x)}, pose=x,
                              velocity=np.zeros(self.body.dof), init_info=info,
-                             heading_votes=0, heading_evidence=0.0, proposal_misses=0)
+                             **CHANNELS_CLEARED, proposal_misses=0)
         self.recorder.add("init", time.perf_counter() - t0)
         if not self.recorder.initialised():
             self.recorder.count("reinitialisations")
