@@ -14,6 +14,7 @@ from depthtrack.track.heading import (LEGS_SWAPPED, SIDES_SWAPPED, facing_direct
                                       search_switch, settle_heading, sort_by_heading, swapped_twin,
                                       swapped_twins, turned_pose)
 from depthtrack.track.judge import judge_frame
+from depthtrack.track.retrack import revoke_rule
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
@@ -41,6 +42,32 @@ def test_swapped_twin_keeps_the_joints_and_faces_the_other_way():
     c = np.asarray(body.joint_positions(both[1]))
     assert np.abs(c - a[SIDES_SWAPPED]).max() < 0.03
     assert facing_direction(both[1]) @ fa < -0.9
+
+
+def test_a_twin_turned_with_its_legs_kept_exchanges_every_side_but_the_legs():
+    """``twin_swaps`` ``"all_but_legs"``: the twin faces the other way, its shoulders, arms
+    and hips on the other sides, its knees and ankles where the pose had them (the
+    thighs uncrossed from a wrong-facing track's crossed ones)."""
+    body = BodyModel.default(height=1.75)
+    legs = [JOINT_NAMES.index(f"{s}_{j}") for s in "lr" for j in ("knee", "ankle")]
+    rest = [JOINT_NAMES.index(f"{s}_{j}") for s in "lr" for j in ("shoulder", "elbow", "wrist", "hip")]
+    x = np.zeros(48)
+    x[2] = 3.0
+    x[POSE_INDEX["l_hip_rx"]] = -0.6                 # the left thigh forward
+    a = np.asarray(body.joint_positions(x))
+    knee = JOINT_NAMES.index("l_knee")
+    assert np.linalg.norm(a[knee] - a[SIDES_SWAPPED][knee]) > 0.1
+    twins = swapped_twins(body, x, ("turned", "rest"), ("all_but_legs",))
+    assert twins.shape == (2, 48)
+    for twin in twins:                               # from the turned pose and from rest
+        b = np.asarray(body.joint_positions(twin))
+        assert np.abs(b[legs] - a[legs]).max() < 0.04
+        assert np.abs(b[rest] - a[SIDES_SWAPPED][rest]).max() < 0.04
+        assert facing_direction(twin) @ facing_direction(x) < -0.9
+    assert len(swapped_twins(body, x, ("rest",), ("all", "all_but_legs"))) == 2
+    assert TrackerSettings().heading.twin_swaps == ("all",)
+    with pytest.raises(ValueError, match="twin_swaps"):
+        TrackerSettings(heading={"twin_swaps": ["legs"]})
 
 
 def test_search_results_count_for_the_heading_they_have():
@@ -202,6 +229,57 @@ def test_a_close_call_is_judged_again_polished_and_a_clear_one_is_not():
     assert TrackerSettings().heading.polish_within == 0.0
     with pytest.raises(ValueError, match="polish_within"):
         TrackerSettings(heading={"polish_within": -0.1})
+
+
+def test_separate_polished_evidence_adds_switches_and_keeps_the_judged_ones():
+    """``polish_evidence = "separate"``: the judged leads feed the default's votes and sum
+    unchanged (a judged switch takes the unpolished twin, though the polish shrank its
+    lead), the polished leads a second set whose switch takes the polished twin, marked
+    ``polished``; a switch clears both sets. ``polish_revoke`` judges only polished switches."""
+    s = TrackerSettings(heading={"polish_within": 0.05, "polish_evidence": "separate"})
+    h = s.heading
+    twin = lambda pose: pose + 1.0                      # noqa: E731
+    tie = lambda pose: (pose + 0.5, 200.0)              # noqa: E731
+
+    def polish_to(lead):                                # both moved by 0.25, the twin's lead
+        return lambda poses: (np.asarray(poses) + 0.25, np.array([200.0, 200.0 - 1000.0 * lead]))
+
+    def judge_by(lead):
+        return lambda poses: np.array([200.0, 200.0 - 1000.0 * lead])
+
+    # a judged vote away from a switch; polished, the lead is gone: the judged set still switches
+    state = TrackingState(log=({},) * h.every, heading_votes=h.votes - 1)
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s,
+                                           judge=judge_by(0.08), polish=polish_to(-0.02))
+    assert switched and (x == 1.5).all() and "polished" not in changes["heading_switches"][0]
+    assert changes["polished_votes"] == 0 and changes["polished_evidence"] == 0.0
+    # the judged lead small, the polished one a vote: only the polished set counts it
+    state = TrackingState(log=({},) * h.every, polished_votes=h.votes - 1)
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s,
+                                           judge=judge_by(0.0), polish=polish_to(0.08))
+    event = changes["heading_switches"][0]
+    assert switched and (x == 1.75).all() and event["polished"] and event["by"] == "votes"
+    assert event["energy_turned"] == 120.0
+    # no switch: each set keeps its own sum
+    state = TrackingState(log=({},) * h.every, heading_evidence=0.02, polished_evidence=0.02)
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, s,
+                                           judge=judge_by(-0.03), polish=polish_to(0.04))
+    assert not switched and (x == 0.0).all()
+    assert changes["heading_evidence"] == 0.0
+    assert changes["polished_evidence"] == pytest.approx(0.02 + 0.04 - h.evidence_drift)
+    # "replace" (the default's shape): the polished lead stands for the judged one, one set
+    one = TrackerSettings(heading={"polish_within": 0.05})
+    x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, one,
+                                           judge=judge_by(-0.03), polish=polish_to(0.04))
+    assert changes["heading_evidence"] == pytest.approx(0.02 + 0.04 - h.evidence_drift)
+    assert "polished_evidence" not in changes
+    with pytest.raises(ValueError, match="polish_evidence"):
+        TrackerSettings(heading={"polish_evidence": "both"})
+    # which rule judges a switch's re-track
+    r = TrackerSettings(heading={"polish_revoke": "unsupported"}).heading
+    assert revoke_rule(r, {"by": "votes", "polished": True}) == "unsupported"
+    assert revoke_rule(r, {"by": "votes"}) == r.retro_revoke == "outscored"
+    assert revoke_rule(TrackerSettings().heading, {"polished": True}) == "outscored"
 
 
 def test_small_steady_leads_add_up_and_mixed_ones_cancel():

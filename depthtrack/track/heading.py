@@ -36,7 +36,7 @@ from ..body.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
 from ..body.skeleton import MODEL_FORWARD, MODEL_UP
 from ..contract import JOINT_INDEX, JOINT_NAMES
 from .energy import relative_lead
-from .settings import TWIN_STARTS
+from .settings import TWIN_STARTS, TWIN_SWAPS
 
 
 def due(state, every: int) -> bool:
@@ -89,8 +89,19 @@ TRUNK_ROOT_JOINTS = [JOINT_INDEX[n] for n in ("head", "neck", "pelvis", "l_shoul
                                               "r_shoulder", "l_hip", "r_hip")]
 
 
-def swapped_twins(body, pose, starts=TWIN_STARTS):
-    """``(K, 48)``: :func:`swapped_twin` fitted from each of ``starts`` (:data:`TWIN_STARTS`).
+#: The heading twins' joint orders (:attr:`HeadingSettings.twin_swaps`): every side
+#: exchanged; every side but the legs' (knees and ankles stay: the body turned with its legs
+#: where they are, for a track facing the wrong way with its thighs crossed to put the legs
+#: right). No arms' counterpart: an elbow kept on its side while the shoulders exchange
+#: theirs is out of an upper arm's reach.
+TWIN_ORDERS = {"all": SIDES_SWAPPED,
+               "all_but_legs": _sides_swapped_for(("shoulder", "elbow", "wrist", "hip"))}
+
+
+def swapped_twins(body, pose, starts=TWIN_STARTS, swaps=("all",)):
+    """``(K, 48)``: :func:`swapped_twin` fitted from each of ``starts`` (:data:`TWIN_STARTS`),
+    for each joint order of ``swaps`` (:data:`TWIN_ORDERS`; ``K = len(swaps) * len(starts)``,
+    order by order).
 
     ``"turned"`` starts from the pose turned about its long axis (:func:`swapped_twin`),
     ``"rest"`` from the rest pose placed by Kabsch on the trunk joints. The turned start
@@ -100,16 +111,20 @@ def swapped_twins(body, pose, starts=TWIN_STARTS):
     joints with every angle pulled toward zero.
     """
     pose = np.asarray(pose, dtype=np.float64)
-    target = np.asarray(body.joint_positions(pose))[SIDES_SWAPPED]
+    joints = np.asarray(body.joint_positions(pose))
     out = []
-    for start in starts:
-        if start == "turned":
-            x0 = turned_pose(pose)
-        elif start == "rest":
-            x0 = root_from_joints(body, target, TRUNK_ROOT_JOINTS)
-        else:
-            raise ValueError(f"unknown twin start {start!r}; choose from {', '.join(TWIN_STARTS)}")
-        out.append(fit_joints(body, target, x0))
+    for swap in swaps:
+        if swap not in TWIN_ORDERS:
+            raise ValueError(f"unknown twin swap {swap!r}; choose from {', '.join(TWIN_SWAPS)}")
+        target = joints[TWIN_ORDERS[swap]]
+        for start in starts:
+            if start == "turned":
+                x0 = turned_pose(pose)
+            elif start == "rest":
+                x0 = root_from_joints(body, target, TRUNK_ROOT_JOINTS)
+            else:
+                raise ValueError(f"unknown twin start {start!r}; choose from {', '.join(TWIN_STARTS)}")
+            out.append(fit_joints(body, target, x0))
     return np.array(out).reshape(-1, len(pose))
 
 

@@ -16,6 +16,9 @@ from .setting_checks import power_of_two as _power_of_two
 START_TWINS = ("turned", "swapped", "search")
 #: How the swapped twins may be fitted (:func:`.heading.swapped_twins`; ``twin_starts``).
 TWIN_STARTS = ("turned", "rest")
+#: Which sides the swapped twins exchange (:attr:`HeadingSettings.twin_swaps`,
+#: :data:`.heading.TWIN_ORDERS`).
+TWIN_SWAPS = ("all", "all_but_legs")
 #: The corrections whose earlier frames :attr:`HeadingSettings.retro_after` may re-track.
 RETRO_KINDS = ("heading", "limbs", "recovery")
 #: How much of a backward track :attr:`HeadingSettings.retro_take` may take.
@@ -96,6 +99,19 @@ class HeadingSettings:
     pose inherits its contortions; from the rest pose it does not (dev 05_20, Kinect v2 from
     120 degrees, seed 2: 20 % -> 88 % of joints within 10 cm, the start check now keeping
     the twin; 105_05 seed 3 62 -> 72 %; five other dev sequences unchanged).
+
+    ``twin_swaps``: which sides the twins exchange (:data:`TWIN_SWAPS`, one or more; each
+    fitted from every ``twin_starts``, :data:`.heading.TWIN_ORDERS`): ``"all"``, the body
+    facing the other way with every limb where the image put it; ``"all_but_legs"``, facing
+    the other way with the knees and ankles kept on their sides (no arms' counterpart: an
+    elbow kept on its side while the shoulders exchange theirs is out of reach). A track can face the wrong way with its thighs crossed so
+    that the legs are on their right sides (from the side the legs' bend says which side is
+    which, the trunk's front does not): its all-sides twin puts the legs wrong and loses, the
+    legs' recheck keeps the trunk wrong. Relabelling the tracked joints against the truth on
+    the dev tracks of the default (parity and wide presets): of 72 sequences, four had frames
+    nearer the truth turned with every side exchanged (192 frames), three turned with the legs
+    kept (70 frames: 01_08 from 90 degrees seed 3, 47 of 50), 19 frames with the legs' sides
+    alone, 9 the arms' (README, "A twin turned with its legs kept").
 
     ``refit_level``: the rung of the start's step ladder (``SearchSettings.levels +
     extra_levels`` rungs, the coarsest ``step_factor`` times the per-frame steps) on which
@@ -306,6 +322,7 @@ class HeadingSettings:
     search_margin: float = 0.05
     search_both: bool = True
     twin_starts: tuple = ("turned", "rest")
+    twin_swaps: tuple = ("all",)
     limb_every: int = 4
     limb_margin: float = 0.05
     refit_level: int = 0
@@ -346,6 +363,10 @@ class HeadingSettings:
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
                                                    f"or false, not {self.judge_start!r}")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))
+        object.__setattr__(self, "twin_swaps", tuple(self.twin_swaps))
+        _check(len(self.twin_swaps) > 0 and set(self.twin_swaps) <= set(TWIN_SWAPS),
+               f"HeadingSettings.twin_swaps must be a non-empty choice of "
+               f"{', '.join(TWIN_SWAPS)}, not {self.twin_swaps!r}")
         object.__setattr__(self, "retro_after", tuple(self.retro_after))
         _check(set(self.retro_after) <= set(RETRO_KINDS),
                f"HeadingSettings.retro_after must be a choice of {', '.join(RETRO_KINDS)}, "

@@ -127,8 +127,8 @@ def reach_all(tracker, frame, pose):
 
 def heading_twins(body, settings, pose):
     """The swapped twins of ``pose (48,)`` the heading checks climb, ``(K, 48)``
-    (:attr:`HeadingSettings.twin_starts`)."""
-    return swapped_twins(body, pose, settings.heading.twin_starts)
+    (:attr:`HeadingSettings.twin_starts`, ``twin_swaps``)."""
+    return swapped_twins(body, pose, settings.heading.twin_starts, settings.heading.twin_swaps)
 
 
 def recheck_twins(body, settings, energy, pose):

@@ -30,7 +30,7 @@ from .setting_checks import positive as _positive
 from .setting_checks import power_of_two as _power_of_two
 # the groups of a start are defined in start_settings.py and heading_settings.py; import
 # every group from here
-from .heading_settings import (START_SCORES, START_TWINS, TWIN_STARTS,  # noqa: F401
+from .heading_settings import (START_SCORES, START_TWINS, TWIN_STARTS, TWIN_SWAPS,  # noqa: F401
                                HeadingSettings)
 from .start_settings import FACINGS, HeightSettings, ShapeSettings, StartSettings  # noqa: F401
 
