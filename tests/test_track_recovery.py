@@ -197,7 +197,7 @@ def test_a_close_call_is_judged_again_polished_and_a_clear_one_is_not():
     """``HeadingSettings.polish_within``: where the judged lead is above minus the band,
     both poses are polished and judged again, and the polished twin is what takes over;
     where the twin trails by more than the band, nothing is polished."""
-    s = TrackerSettings(heading={"polish_within": 0.05})
+    s = TrackerSettings(heading={"polish_within": 0.05, "polish_evidence": "replace"})
     h = s.heading
     state = TrackingState(log=({},) * h.every, heading_votes=h.votes - 1)
     twin = lambda pose: pose + 1.0                      # noqa: E731
@@ -219,14 +219,15 @@ def test_a_close_call_is_judged_again_polished_and_a_clear_one_is_not():
                                            judge=judge_by(-0.08), polish=polish)
     assert len(polished) == 1 and not switched and changes["heading_votes"] == 0
     # "both": a clear lead for the twin is left as judged, a close one either way polished
-    both = TrackerSettings(heading={"polish_within": 0.05, "polish_side": "both"})
+    both = TrackerSettings(heading={"polish_within": 0.05, "polish_side": "both",
+                                    "polish_evidence": "replace"})
     x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, both,
                                            judge=judge_by(0.08), polish=polish)
     assert len(polished) == 1 and switched and (x == 1.5).all()
     x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, both,
                                            judge=judge_by(0.03), polish=polish)
     assert len(polished) == 2 and switched and (x == 1.75).all()
-    assert TrackerSettings().heading.polish_within == 0.0
+    assert TrackerSettings().heading.polish_within == 0.05
     with pytest.raises(ValueError, match="polish_within"):
         TrackerSettings(heading={"polish_within": -0.1})
 
@@ -268,7 +269,7 @@ def test_separate_polished_evidence_adds_switches_and_keeps_the_judged_ones():
     assert changes["heading_evidence"] == 0.0
     assert changes["polished_evidence"] == pytest.approx(0.02 + 0.04 - h.evidence_drift)
     # "replace" (the default's shape): the polished lead stands for the judged one, one set
-    one = TrackerSettings(heading={"polish_within": 0.05})
+    one = TrackerSettings(heading={"polish_within": 0.05, "polish_evidence": "replace"})
     x, changes, switched = recheck_heading(state, np.zeros(48), tie, twin, 1000.0, one,
                                            judge=judge_by(-0.03), polish=polish_to(0.04))
     assert changes["heading_evidence"] == pytest.approx(0.02 + 0.04 - h.evidence_drift)
@@ -279,7 +280,10 @@ def test_separate_polished_evidence_adds_switches_and_keeps_the_judged_ones():
     r = TrackerSettings(heading={"polish_revoke": "unsupported"}).heading
     assert revoke_rule(r, {"by": "votes", "polished": True}) == "unsupported"
     assert revoke_rule(r, {"by": "votes"}) == r.retro_revoke == "outscored"
-    assert revoke_rule(TrackerSettings().heading, {"polished": True}) == "outscored"
+    same = TrackerSettings(heading={"polish_revoke": "same"}).heading
+    assert revoke_rule(same, {"polished": True}) == "outscored"
+    d = TrackerSettings().heading                      # the default since 2026-11-29
+    assert (d.polish_within, d.polish_evidence, d.polish_revoke) == (0.05, "separate", "unsupported")
 
 
 def test_small_steady_leads_add_up_and_mixed_ones_cancel():

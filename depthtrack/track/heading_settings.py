@@ -157,12 +157,14 @@ class HeadingSettings:
     on the dev parity tracks held back to front from the side and from behind, the twin
     (within 10 cm of the truth on 73 to 100 % of its joints) led on 5 to 9 of 12 rechecks
     before the polish and on 8 to 12 after it, while on three tracks facing the right way
-    the polished twin led once in 36. Two polishes per close call. Off: on dev it put those
-    three right (20.9 -> 93.6, 26.8 -> 93.6, 20.4 -> 98.1 %) and lost overhead seed 3 (Azure
-    NFOV from 240 degrees), 98.5 -> 20.0 %, whose right switch the default made by a summed
-    evidence of 0.1165 and the polished leads, smaller, never made; with ``retro_revoke``
-    "outscored" it also lost overhead seed 1, whose polished right switches the revoke took
-    back (README, "A close front/back call, polished").
+    the polished twin led once in 36. Two polishes per close call. 0.05 by default since
+    2026-11-29, with ``polish_evidence`` "separate" and ``polish_revoke`` "unsupported"
+    (below). Alone (``"replace"``) it put those three right (20.9 -> 93.6, 26.8 -> 93.6,
+    20.4 -> 98.1 %) and lost overhead seed 3 (Azure NFOV from 240 degrees), 98.5 -> 20.0 %,
+    whose right switch the default made by a summed evidence of 0.1165 and the polished
+    leads, smaller, never made; with ``retro_revoke`` "outscored" it also lost overhead seed
+    1, whose polished right switches the revoke took back (README, "A close front/back
+    call, polished").
 
     ``polish_side``: which judged leads ``polish_within`` takes for close calls
     (:data:`POLISH_SIDES`, :func:`.heading.close_call`): ``"above"``, every lead above
@@ -175,17 +177,22 @@ class HeadingSettings:
 
     ``polish_evidence``: what a polished close call's lead feeds (:data:`POLISH_EVIDENCES`).
     ``"replace"``: it stands for the judged lead in the one set of votes and CUSUM (the
-    figures above). ``"separate"``: the judged leads keep their own votes and sum, exactly
-    as without the polish, and the polished leads (the judged lead where no close call was
+    figures above). ``"separate"`` (the default since 2026-11-29): the judged leads keep
+    their own votes and sum, exactly as without the polish, and the polished leads (the judged lead where no close call was
     polished) build a second set (``polished_votes``, ``polished_evidence`` in the state);
     the twin takes over when either crosses, the judged set first (its switch takes the
     unpolished twin), the polished set's switch the polished twin, marked ``"polished":
     true`` in ``heading_switches``. The polish then adds switches and takes none away: the
     polish shrinks some right leads (overhead seed 3) and finds others (105_05 from 90
-    degrees).
+    degrees). With ``polish_revoke`` "unsupported", paired with the earlier default on dev:
+    the 27 off-front parity tracks +8.0 +- 4.5 points (81.0 -> 89.1 %, three back-to-front
+    tracks put right, none lost more than 2.1), the 45 dev wide sequences +0.03 +- 0.06
+    (two changed, none lost more than 1.1; overhead seed 3 keeps its judged switch), the
+    candidates per frame unchanged (README, "Polished leads beside the judged ones").
 
     ``polish_revoke``: the :data:`RETRO_REVOKES` rule for a switch made on polished leads
-    (:func:`.retrack.revoke_rule`; ``"same"``: ``retro_revoke``'s). ``"outscored"`` judges
+    (:func:`.retrack.revoke_rule`; ``"same"``: ``retro_revoke``'s; ``"unsupported"`` by
+    default since 2026-11-29). ``"outscored"`` judges
     the re-tracked frames unpolished, where from the side or behind the two headings'
     energies are within 1 to 2 % of each other: it took back overhead seed 1's polished
     right switches.
@@ -330,10 +337,10 @@ class HeadingSettings:
     recheck_tile: int = 0
     judge_tile: int = 256
     judge_start: bool = False
-    polish_within: float = 0.0
+    polish_within: float = 0.05
     polish_side: str = "above"
-    polish_evidence: str = "replace"
-    polish_revoke: str = "same"
+    polish_evidence: str = "separate"
+    polish_revoke: str = "unsupported"
     reseat_every: int = 0
     reseat_margin: float = 0.01
     reseat_climbs: int = 1
