@@ -1,0 +1,44 @@
+"""tools/relabel_modes.py: a track's failure mode named by the relabelling nearest the truth."""
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.body.skeleton import POSE_INDEX
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def _tool():
+    spec = importlib.util.spec_from_file_location("relabel_modes", REPO / "tools" / "relabel_modes.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_track_turned_with_its_legs_kept_is_named_so_and_a_right_one_is_not():
+    tool = _tool()
+    body = BodyModel.default(height=1.75)
+    poses = np.zeros((4, 48))
+    poses[:, 2] = 3.0
+    poses[:, POSE_INDEX["l_hip_rx"]] = np.linspace(-0.9, -0.6, 4)     # a stride, not symmetric
+    poses[:, POSE_INDEX["r_shoulder_rx"]] = -0.8
+    truth = np.asarray(body.joint_positions(poses))
+    order = tool.RELABELLINGS["turned_legs_kept"]
+    wrong = truth[:, order]                  # the joints a track turned with its legs kept holds
+    errors = tool.relabel_errors(wrong, truth)
+    assert errors["turned_legs_kept"] == pytest.approx(np.zeros(4), abs=1e-9)
+    assert (errors["as_tracked"] > 0.08).all() and (errors["turned"] > 0.08).all()
+    found = tool.modes(errors, off=0.08, nearer=0.4)
+    assert found["turned_legs_kept"] == [0, 1, 2, 3] and not found["turned"] and not found["legs"]
+    # a track within a few centimetres: no mode
+    close = tool.modes(tool.relabel_errors(truth + 0.02, truth), off=0.08, nearer=0.4)
+    assert not any(close.values())
+
+
+def test_a_missing_sequence_is_one_line_and_exit_status_2(tmp_path, capsys):
+    assert _tool().main([str(tmp_path / "nope"), str(tmp_path / "track")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "nope" in err
