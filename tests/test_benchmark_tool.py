@@ -1,20 +1,17 @@
 """tools/benchmark.py and tools/benchmark_report.py: which motions, which commands, and the
 statistics over seeds."""
-import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from tool_module import load_tool
 
 REPO = Path(__file__).resolve().parents[1]
 
 
 def _load(name):
-    spec = importlib.util.spec_from_file_location(name, REPO / "tools" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool(name)
 
 
 @pytest.fixture(scope="module")

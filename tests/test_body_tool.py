@@ -1,6 +1,4 @@
 """tools/make_body_mesh.py rebuilds a closed, skinned, loadable body (coarse grid, for speed)."""
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,14 +8,11 @@ pytest.importorskip("skimage")
 pytest.importorskip("fast_simplification")
 
 from depthtrack.body import BodyModel  # noqa: E402
-
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "make_body_mesh.py"
+from tool_module import load_tool  # noqa: E402
 
 
 def test_tool_builds_closed_skinned_meshes(tmp_path):
-    spec = importlib.util.spec_from_file_location("make_body_mesh", TOOL)
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
+    tool = load_tool("make_body_mesh")
     results = tool.build(voxel=0.015, full_faces=3000, decimated_faces=800, smooth_iterations=5,
                          out_dir=tmp_path, coarse_faces=400)
     wanted = {"full": 3000, "decimated": 800, "coarse": 400}

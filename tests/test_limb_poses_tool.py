@@ -1,5 +1,4 @@
 """tools/make_limb_poses.py: the limb library from the train clips only, reproducibly."""
-import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -7,16 +6,14 @@ import pytest
 
 from depthtrack.body import BodyModel
 from depthtrack.track.reseat import LIMB_SLOTS, MIRROR, library_path
+from tool_module import load_tool
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("make_limb_poses", REPO / "tools" / "make_limb_poses.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("make_limb_poses")
 
 
 def test_spread_picks_the_farthest_points_first():

@@ -1,16 +1,13 @@
 """tools/make_motion_prior.py fits on the train clips of the motion split by default."""
-import importlib.util
 import json
 from pathlib import Path
+from tool_module import load_tool
 
 REPO = Path(__file__).resolve().parents[1]
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("make_motion_prior", REPO / "tools" / "make_motion_prior.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("make_motion_prior")
 
 
 def test_default_inputs_are_the_train_clips_only(tmp_path):

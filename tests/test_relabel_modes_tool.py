@@ -1,21 +1,15 @@
 """tools/relabel_modes.py: a track's failure mode named by the relabelling nearest the truth."""
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from depthtrack.body import BodyModel
 from depthtrack.body.skeleton import POSE_INDEX
-
-REPO = Path(__file__).resolve().parent.parent
+from tool_module import load_tool
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("relabel_modes", REPO / "tools" / "relabel_modes.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("relabel_modes")
 
 
 def test_a_track_turned_with_its_legs_kept_is_named_so_and_a_right_one_is_not():

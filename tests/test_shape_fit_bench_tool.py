@@ -1,19 +1,13 @@
 """tools/shape_fit_bench.py --tracked: the oracle body is the person's, and the summary's numbers."""
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
-
-REPO = Path(__file__).resolve().parents[1]
+from tool_module import load_tool
 
 
 @pytest.fixture(scope="module")
 def tool():
-    spec = importlib.util.spec_from_file_location("shape_fit_bench", REPO / "tools" / "shape_fit_bench.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("shape_fit_bench")
 
 
 def test_true_body_is_the_synthesized_person(tool, tmp_path):

@@ -1,16 +1,9 @@
 """tools/start_check_bench.py: which rule keeps the clearly worse heading."""
-import importlib.util
-from pathlib import Path
-
-REPO = Path(__file__).resolve().parent.parent
+from tool_module import load_tool
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("start_check_bench",
-                                                  REPO / "tools" / "start_check_bench.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("start_check_bench")
 
 
 def _hyp(unexplained, energy, within):

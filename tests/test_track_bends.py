@@ -9,6 +9,7 @@ from depthtrack.contract import JOINT_INDEX
 from depthtrack.track import TrackerSettings
 from depthtrack.track.start import BEND_POSES, candidate_poses, head_to_feet_turn
 from depthtrack.track.tracker import Tracker
+from tool_module import load_tool
 
 
 def _down_dog(body):
@@ -106,14 +107,9 @@ def test_an_upright_start_keeps_the_gate_shut(tmp_path, capsys):
     err_never, info_never = _start(body, standing, tmp_path, never, 30.0)
     assert np.array_equal(err, err_never) and info["finalists"] == info_never["finalists"]
     # tools/start_gate.py replays the same start and says so, one JSON line per sequence
-    import importlib.util
     import json
-    from pathlib import Path
 
-    spec = importlib.util.spec_from_file_location(
-        "start_gate", Path(__file__).resolve().parent.parent / "tools" / "start_gate.py")
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
+    tool = load_tool("start_gate")
     assert tool.main([str(tmp_path / "seq30"), "--cue"]) == 0
     line = json.loads(capsys.readouterr().out)
     assert line["unexplained"] == gate["unexplained"] and line["searched"] is False

@@ -15,6 +15,7 @@ from depthtrack.track import TrackerSettings
 from depthtrack.track.heading import facing_direction
 from depthtrack.track.start import clearly_facing, wrong_side
 from depthtrack.track.tracker import Tracker
+from tool_module import load_tool
 
 
 @pytest.fixture(scope="module")
@@ -119,13 +120,7 @@ def test_eval_tracks_with_the_facing_given(from_behind, tmp_path):
 
 
 def test_the_benchmark_reads_the_facing_off_the_truth(from_behind, tmp_path):
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location(
-        "benchmark", Path(__file__).resolve().parents[1] / "tools" / "benchmark.py")
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
+    tool = load_tool("benchmark")
     assert tool.facing_from_truth(from_behind) == "away"
     front = tmp_path / "front"
     synthesize_procedural("squat", front, start=0.6, seconds=0.08, seed=3, azimuth=30)
