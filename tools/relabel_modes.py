@@ -75,7 +75,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog="example:\n  .venv/bin/python tools/relabel_modes.py "
-                                            "OUT/dev/sequences/01_08_c3_s3 OUT/dev/tracks/01_08_c3_s3/hc+ep")
+                                            "OUT/dev/sequences/01_08_c3_s3 "
+                                            "OUT/dev/tracks/01_08_c3_s3/hc+ep")
     parser.add_argument("pairs", nargs="+", type=pathlib.Path, metavar="SEQ TRACK",
                         help="sequence directories with ground truth, each followed by its track")
     parser.add_argument("--off", type=float, default=0.08, help="metres off on average (0.08)")

@@ -123,7 +123,8 @@ def swapped_twins(body, pose, starts=TWIN_STARTS, swaps=("all",)):
             elif start == "rest":
                 x0 = root_from_joints(body, target, TRUNK_ROOT_JOINTS)
             else:
-                raise ValueError(f"unknown twin start {start!r}; choose from {', '.join(TWIN_STARTS)}")
+                raise ValueError(f"unknown twin start {start!r}; "
+                                 f"choose from {', '.join(TWIN_STARTS)}")
             out.append(fit_joints(body, target, x0))
     return np.array(out).reshape(-1, len(pose))
 
@@ -266,15 +267,17 @@ def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings
         (:attr:`HeadingSettings.judge_tile`: the same energy on finer tiles).
     polish : callable ``(poses (2, 48)) -> (poses (2, 48), energies (2,))``, optional
         With ``judge``, a close call's two poses polished and judged again
-        (:attr:`HeadingSettings.polish_within`); the polished twin is the one that may take
-        over.
+        (:attr:`HeadingSettings.polish_within`): with ``polish_evidence`` "replace" the
+        polished lead and twin stand for the judged ones; with "separate" they feed the
+        second set of votes and sum, whose switch takes the polished twin.
 
     Returns
     -------
     pose : (48,) float
         The twin when it took over, else ``pose``.
     changes : dict
-        For the state (``heading_votes``, ``heading_switches``).
+        For the state (``heading_votes``, ``heading_evidence``, ``polished_votes``,
+        ``polished_evidence``, ``heading_switches``).
     switched : bool
     """
     h = settings.heading

@@ -104,14 +104,16 @@ class HeadingSettings:
     fitted from every ``twin_starts``, :data:`.heading.TWIN_ORDERS`): ``"all"``, the body
     facing the other way with every limb where the image put it; ``"all_but_legs"``, facing
     the other way with the knees and ankles kept on their sides (no arms' counterpart: an
-    elbow kept on its side while the shoulders exchange theirs is out of reach). A track can face the wrong way with its thighs crossed so
-    that the legs are on their right sides (from the side the legs' bend says which side is
-    which, the trunk's front does not): its all-sides twin puts the legs wrong and loses, the
-    legs' recheck keeps the trunk wrong. Relabelling the tracked joints against the truth on
-    the dev tracks of the default (parity and wide presets): of 72 sequences, four had frames
+    elbow kept on its side while the shoulders exchange theirs is out of reach). A track can
+    face the wrong way with its thighs crossed so that the legs are on their right sides
+    (from the side the legs' bend says which side is which, the trunk's front does not): its
+    all-sides twin puts the legs wrong and loses, the legs' recheck keeps the trunk wrong.
+    Relabelling the tracked joints against the truth on the dev tracks of the default
+    (parity and wide presets; ``tools/relabel_modes.py``): of 72 sequences, four had frames
     nearer the truth turned with every side exchanged (192 frames), three turned with the legs
     kept (70 frames: 01_08 from 90 degrees seed 3, 47 of 50), 19 frames with the legs' sides
-    alone, 9 the arms' (README, "A twin turned with its legs kept").
+    alone, 9 the arms' (README, "A twin turned with its legs kept"). Off: a probe on those
+    three put 105_05 right (26.8 -> 92.9 %) and left 01_08 seed 3 as it was (38.3 %).
 
     ``refit_level``: the rung of the start's step ladder (``SearchSettings.levels +
     extra_levels`` rungs, the coarsest ``step_factor`` times the per-frame steps) on which
@@ -178,8 +180,9 @@ class HeadingSettings:
     ``polish_evidence``: what a polished close call's lead feeds (:data:`POLISH_EVIDENCES`).
     ``"replace"``: it stands for the judged lead in the one set of votes and CUSUM (the
     figures above). ``"separate"`` (the default since 2026-11-29): the judged leads keep
-    their own votes and sum, exactly as without the polish, and the polished leads (the judged lead where no close call was
-    polished) build a second set (``polished_votes``, ``polished_evidence`` in the state);
+    their own votes and sum, exactly as without the polish, and the polished leads (the
+    judged lead where no close call was polished) build a second set (``polished_votes``,
+    ``polished_evidence`` in the state);
     the twin takes over when either crosses, the judged set first (its switch takes the
     unpolished twin), the polished set's switch the polished twin, marked ``"polished":
     true`` in ``heading_switches``. The polish then adds switches and takes none away: the
@@ -192,10 +195,9 @@ class HeadingSettings:
 
     ``polish_revoke``: the :data:`RETRO_REVOKES` rule for a switch made on polished leads
     (:func:`.retrack.revoke_rule`; ``"same"``: ``retro_revoke``'s; ``"unsupported"`` by
-    default since 2026-11-29). ``"outscored"`` judges
-    the re-tracked frames unpolished, where from the side or behind the two headings'
-    energies are within 1 to 2 % of each other: it took back overhead seed 1's polished
-    right switches.
+    default since 2026-11-29). ``"outscored"`` judges the re-tracked frames unpolished,
+    where from the side or behind the two headings' energies are within 1 to 2 % of each
+    other: it took back overhead seed 1's polished right switches.
 
     ``judge_start``: with ``judge_tile``, a start check whose two tracks came out within the
     margin of each other (``heading_check.ambiguous``) is decided by their mean energy per

@@ -43,6 +43,7 @@ from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy, margin_floor, unexplained
 from .evidence import PartModel
+from .heading import CHANNELS_CLEARED
 from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
@@ -50,7 +51,6 @@ from .rechecks import recheck_stage, turned_start
 from .record import Recorder
 from .renderers import RendererSet
 from .reseat import limb_climber, limb_library, reseat_limbs
-from .heading import CHANNELS_CLEARED
 from .search import Climbers, polish, predict, search
 from .settings import TrackerSettings
 from .start import global_search
