@@ -10,19 +10,15 @@ from tool_module import load_tool
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _load(name):
-    return load_tool(name)
-
-
 @pytest.fixture(scope="module")
 def tool():
-    return _load("benchmark")
+    return load_tool("benchmark")
 
 
 @pytest.fixture(scope="module")
 def report():
     """tools/benchmark_report.py: the statistics and the Markdown report."""
-    return _load("benchmark_report")
+    return load_tool("benchmark_report")
 
 
 def test_splits_are_disjoint_and_quick_takes_mocap_and_procedural(tool, tmp_path):
@@ -129,7 +125,7 @@ def test_two_runs_are_compared_sequence_by_sequence(report):
 
 
 def test_compare_reports_prints_the_paired_difference_and_refuses_bad_input(tmp_path, capsys):
-    tool = _load("compare_reports")
+    tool = load_tool("compare_reports")
     a, b = tmp_path / "a.json", tmp_path / "b.json"
     a.write_text(json.dumps(_report_of({"s1": 0.5, "s2": 0.9})))
     b.write_text(json.dumps(_report_of({"s1": 0.6, "s2": 0.9})))

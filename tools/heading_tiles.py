@@ -28,8 +28,8 @@ sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
-from depthtrack.track.heading import (facing_direction, fit_joints, limb_swapped_twins,  # noqa: E402
-                                      swapped_twins)
+from depthtrack.track.heading import facing_direction, fit_joints, limb_swapped_twins  # noqa: E402
+from depthtrack.track.rechecks import heading_twins  # noqa: E402
 from depthtrack.track.energy import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
@@ -63,7 +63,7 @@ def main(argv=None) -> int:
 
             kept = climbed(poses[f])
             twins = ([t for _, t in limb_swapped_twins(body, kept)] if args.limbs
-                     else swapped_twins(body, kept, settings.heading.twin_starts))
+                     else heading_twins(body, settings, kept))
             twin = min((climbed(t) for t in twins), key=energy.one)
             fitted = climbed(fit_joints(body, truth, kept))
 
