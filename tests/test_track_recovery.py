@@ -279,9 +279,9 @@ def test_separate_polished_evidence_adds_switches_and_keeps_the_judged_ones():
     # which rule judges a switch's re-track
     r = TrackerSettings(heading={"polish_revoke": "unsupported"}).heading
     assert revoke_rule(r, {"by": "votes", "polished": True}) == "unsupported"
-    assert revoke_rule(r, {"by": "votes"}) == r.retro_revoke == "outscored"
+    assert revoke_rule(r, {"by": "votes"}) == r.retro_revoke == "outscored_unless_met"
     same = TrackerSettings(heading={"polish_revoke": "same"}).heading
-    assert revoke_rule(same, {"polished": True}) == "outscored"
+    assert revoke_rule(same, {"polished": True}) == "outscored_unless_met"
     d = TrackerSettings().heading                      # the default since 2026-11-29
     assert (d.polish_within, d.polish_evidence, d.polish_revoke) == (0.05, "separate", "unsupported")
 

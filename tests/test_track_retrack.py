@@ -41,8 +41,9 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
         # seen on an H200: the search turned the track before the recheck had to
         pytest.xfail("the recheck had to switch only on llvmpipe; another rasteriser's rounding "
                      "let the search turn the track first")
-    # the default's revoke rule ("outscored") takes the first switch back (frame 4: its four
-    # backward frames 1 % worse, better on one of them), and the recheck turns the track
+    # the default's revoke rule ("outscored_unless_met"; its backward track reaches the start
+    # without meeting the forward heading, so judged as "outscored") takes the first switch
+    # back (frame 4: its four backward frames 1 % worse, better on one of them), and the recheck turns the track
     # again four frames later; that switch's re-track goes back to the start
     switch = info["heading_switches"][-1]
     retracks = [r for r in info["heading_retracks"] if not r.get("revoked")]

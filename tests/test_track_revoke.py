@@ -24,6 +24,14 @@ def test_a_switch_is_taken_back_by_the_rule_asked_for():
         [True, False, False, True, False]
     assert [revokes("unsupported", t, b, n, outscored=w) for t, b, n, w in stretch] == \
         [False, False, False, True, False]
+    # "outscored_unless_met": "outscored", but "unsupported" where the backward track met the
+    # forward heading (the turn found inside the window: a fast spin's frames fit either badly)
+    assert [revokes("outscored_unless_met", t, b, n, outscored=w) for t, b, n, w in stretch] == \
+        [True, False, False, True, False]
+    assert [revokes("outscored_unless_met", t, b, n, outscored=w, met=True)
+            for t, b, n, w in stretch] == [False, False, False, True, False]
+    assert revokes("outscored_unless_met", 0, 3, 9, outscored=True, met=True) is False
+    assert revokes("outscored", 0, 3, 9, outscored=True, met=True) is True
 
 
 

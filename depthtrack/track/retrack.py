@@ -150,7 +150,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
              better if h.retro_take == "prefix" else 0)
         revoke = kind == "heading" and revokes(
             revoke_rule(h, corrected.heading_switches[-1]), n, better, len(indices),
-            outscored=e_back > e_forward)
+            outscored=e_back > e_forward, met=stopped == STOP_LABELS["heading"])
         n = 0 if revoke else n
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
@@ -177,7 +177,7 @@ def revoke_rule(heading, switch: dict) -> str:
 
 
 def revokes(rule: str, taken: int, better: int, frames: int = 0,
-            outscored: bool = False) -> bool:
+            outscored: bool = False, met: bool = False) -> bool:
     """Whether a heading switch is taken back by ``rule`` (:data:`~.heading_settings.
     RETRO_REVOKES`, :attr:`HeadingSettings.retro_revoke`) when its re-track took ``taken``
     of the ``frames`` it re-tracked and did better on the ``better`` frames next to it, and
@@ -189,7 +189,14 @@ def revokes(rule: str, taken: int, better: int, frames: int = 0,
     ``"outscored"`` reads the whole stretch where the two headings differ: a turn the
     image bears out only next to the switch (a back bend seen from the side reads as a
     forward bend facing the other way, which the pose prior likes better) is not one the
-    frames before it bear out, though each lies within the take margin."""
+    frames before it bear out, though each lies within the take margin.
+
+    ``"outscored_unless_met"``: ``"outscored"``, but ``"unsupported"`` for a switch whose
+    backward track ``met`` the forward track's heading (stopped ``"same heading"``): it
+    found where the turn began, inside the window, and a fast turn's frames are explained
+    poorly by either track, so their summed energy says little about the switch."""
+    if rule == "outscored_unless_met":
+        rule = "unsupported" if met else "outscored"
     if rule == "refused":
         return taken == 0
     if rule in ("unsupported", "outscored") and better == 0:
