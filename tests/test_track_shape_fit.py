@@ -202,5 +202,37 @@ def test_the_trial_without_rechecks_still_checks_its_start(shaped_sequence, monk
                              method="hc")
     assert info["fitted"] and info["start_info"]["heading_check"]["frames"] == 2
     assert info["trial_recoveries"] == {"recoveries_tried": 0, "recoveries": 0}
+    assert info["trial_heading_switches"] == info["trial_limb_swaps"] == []
     # every frame after the start asked the recheck, and each time with the rechecks off
     assert len(seen) >= 2 and set(seen) == {0}
+
+
+def test_the_trials_corrections_are_reported(shaped_sequence, monkeypatch):
+    """A heading switch the shape fit's trial makes (here forced on its second frame after
+    the start) is reported under ``trial_heading_switches`` with its sequence index: it
+    shaped the poses the fit used, and the start the track takes over."""
+    from depthtrack.track import ShapeSettings, TrackerSettings
+    from depthtrack.track import rechecks as rechecks_module
+    from depthtrack.track.height import fit_body_shape
+
+    seq, _ = shaped_sequence
+    original = rechecks_module.recheck_heading
+
+    def forced(state, pose, refit, twins, pixels, settings, **given):
+        if state.frame == 2 and not state.heading_switches:
+            switch = {"frame": state.frame, "by": "votes", "energy_kept": 2.0,
+                      "energy_turned": 1.0}
+            return pose, {"heading_switches": state.heading_switches + (switch,)}, True
+        return original(state, pose, refit, twins, pixels, settings, **given)
+
+    monkeypatch.setattr(rechecks_module, "recheck_heading", forced)
+    settings = TrackerSettings(heading={"frames": 2, "every": 1}, start={"complete_fraction": 0.0},
+                               shape=ShapeSettings(frames=4, fit_frames=2, rounds=1,
+                                                   max_iterations=1, prior_weight=1.0))
+    _, info = fit_body_shape((seq.depth(i) for i in range(len(seq))), BodyModel.default(1.75),
+                             seq.camera, fps=seq.fps, settings=settings, fit_scale=False,
+                             method="hc")
+    switches = info["trial_heading_switches"]
+    assert len(switches) == 1 and switches[0]["by"] == "votes" and switches[0]["frame"] == 2
+    assert 2 <= switches[0]["index"] < 4
+    assert info["trial_limb_swaps"] == [] or all("index" in e for e in info["trial_limb_swaps"])

@@ -181,7 +181,9 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         The fitted body (``body`` itself when too few frames had a person: ``info`` says so).
     info : dict
         ``fitted`` (bool), ``frames_tracked``, ``trial_recoveries`` (the trial's
-        ``recoveries_tried`` and ``recoveries``), ``frames_used``, ``seconds`` (tracking and
+        ``recoveries_tried`` and ``recoveries``), ``trial_heading_switches``,
+        ``trial_limb_swaps``, ``trial_reaches``, ``trial_reseats`` (the trial's corrections,
+        entries as in ``summary.json``'s lists of the same names), ``frames_used``, ``seconds`` (tracking and
         fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
         a pose, ``start_pose``: its pose (48 floats) refined with the fitted body, and
         ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
@@ -220,7 +222,12 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         tracked = [(i, x) for i, x in trial if x is not None]
         start = dict(tracker.state.init_info)
         recoveries = {k: tracker.recorder.counts[k] for k in ("recoveries_tried", "recoveries")}
-    info = {"fitted": False, "frames_tracked": len(trial), "trial_recoveries": recoveries}
+        described = tracker.describe()
+        # the trial's own corrections: they shape its poses and so the fit and the start
+        corrections = {f"trial_{k}": described[k] for k in ("heading_switches", "limb_swaps",
+                                                             "reaches", "reseats")}
+    info = {"fitted": False, "frames_tracked": len(trial), "trial_recoveries": recoveries,
+            **corrections}
     if len(tracked) < s.fit_frames:
         info.update(reason=f"{len(tracked)} of the first {len(trial)} frames got a pose; "
                            f"the fit needs {s.fit_frames}",
