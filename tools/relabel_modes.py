@@ -7,7 +7,11 @@ wrong way), every side but the knees' and ankles' (``turned_legs_kept``: facing 
 way with the thighs crossed so the legs are right; ``HeadingSettings.twin_swaps``), the
 legs' sides only, the arms' sides only. A frame counts for a relabelling when the track is
 more than ``--off`` metres off on average and the relabelling is nearer by the fraction
-``--nearer`` at least.
+``--nearer`` at least. A frame that is that far off, for which no relabelling counts, and
+whose trunk is turned 45 to 135 degrees from the true one
+(:func:`depthtrack.body.facing.facing_error_deg`) counts as ``quarter_turned``: seen in
+profile where the person faces the camera, or the reverse -- a mistake no exchange of sides
+mends.
 
     .venv/bin/python tools/relabel_modes.py SEQ TRACK [SEQ TRACK ...] [--json OUT]
 
@@ -27,6 +31,7 @@ REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from depthtrack.body import BodyModel  # noqa: E402
+from depthtrack.body.facing import facing_error_deg  # noqa: E402
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
@@ -48,15 +53,22 @@ def relabel_errors(tracked, truth):
     return out
 
 
-def modes(errors, off: float, nearer: float):
+def modes(errors, off: float, nearer: float, facing_deg=None):
     """``{name: frames}``: per relabelling, the frames where the track is more than ``off`` m
-    off and that relabelling is the nearest, nearer by the fraction ``nearer`` at least."""
+    off and that relabelling is the nearest, nearer by the fraction ``nearer`` at least; with
+    ``facing_deg (F,)`` (:func:`facing_error_deg`) also ``"quarter_turned"``: the frames that
+    far off, no relabelling's, whose trunk is turned 45 to 135 degrees from the truth's."""
     names = list(RELABELLINGS)
     stack = np.stack([errors[n] for n in names])                    # (R, F)
     best = np.argmin(stack, axis=0)
     asis = errors["as_tracked"]
     hit = (asis > off) & (stack[best, np.arange(len(asis))] < (1.0 - nearer) * asis)
-    return {n: [int(f) for f in np.flatnonzero(hit & (best == k))] for k, n in enumerate(names)}
+    out = {n: [int(f) for f in np.flatnonzero(hit & (best == k))] for k, n in enumerate(names)}
+    if facing_deg is not None:
+        deg = np.nan_to_num(np.asarray(facing_deg, dtype=np.float64), nan=0.0)
+        quarter = (asis > off) & ~hit & (deg > 45.0) & (deg <= 135.0)
+        out["quarter_turned"] = [int(f) for f in np.flatnonzero(quarter)]
+    return out
 
 
 def track_joints(seq_dir: pathlib.Path, track_dir: pathlib.Path):
@@ -85,11 +97,12 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if len(args.pairs) % 2:
         parser.error("give each sequence with its track: SEQ TRACK [SEQ TRACK ...]")
-    report, totals = {}, {n: 0 for n in RELABELLINGS}
+    report, totals = {}, {n: 0 for n in [*RELABELLINGS, "quarter_turned"]}
     try:
         for seq_dir, track_dir in zip(args.pairs[::2], args.pairs[1::2]):
             tracked, truth = track_joints(seq_dir, track_dir)
-            found = modes(relabel_errors(tracked, truth), args.off, args.nearer)
+            found = modes(relabel_errors(tracked, truth), args.off, args.nearer,
+                          facing_error_deg(tracked, truth))
             report[str(track_dir)] = {"frames": len(tracked), **found}
             for n, frames in found.items():
                 totals[n] += len(frames)

@@ -31,12 +31,27 @@ def back_to_front(estimated, truth):
     (F,) float
         1.0 back to front, 0.0 not, NaN where either side's joints are unknown.
     """
-    def sideways(joints):
-        j = np.asarray(joints, dtype=np.float64)
-        return sum(j[:, JOINT_INDEX[r]] - j[:, JOINT_INDEX[lft]] for lft, r in TRUNK_SIDES)
-
-    dot = np.sum(sideways(estimated) * sideways(truth), axis=-1)
+    dot = np.sum(trunk_sideways(estimated) * trunk_sideways(truth), axis=-1)
     return np.where(np.isfinite(dot), (dot < 0).astype(np.float64), np.nan)
+
+
+def trunk_sideways(joints):
+    """``(F, 3)``: the trunk's sideways axis of contract ``joints (F, 15, 3)``, the sum of
+    the left-to-right vectors of the hips and the shoulders (:data:`TRUNK_SIDES`; not
+    normalised)."""
+    j = np.asarray(joints, dtype=np.float64)
+    return sum(j[:, JOINT_INDEX[r]] - j[:, JOINT_INDEX[lft]] for lft, r in TRUNK_SIDES)
+
+
+def facing_error_deg(estimated, truth):
+    """``(F,)``: the angle (degrees, 0 to 180) between the trunks' sideways axes
+    (:func:`trunk_sideways`) of ``estimated`` and ``truth`` ``(F, 15, 3)``: how far a
+    tracked trunk is turned from the true one (over 90: :func:`back_to_front`; 45 to 135: a
+    quarter turn off, the body seen in profile where it faces the camera or the reverse).
+    NaN where either is unknown."""
+    a, b = trunk_sideways(estimated), trunk_sideways(truth)
+    cos = np.sum(a * b, axis=-1) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1))
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def sides_exchanged(estimated, truth, order):
