@@ -1,6 +1,7 @@
 """A heading switch taken back when the frames before it do not bear it out
 (``HeadingSettings.retro_revoke``, issue 10): the rules in closed form, and a wrong switch
-injected into a track that faces the right way, on a short synthetic ToF sequence."""
+injected into a track that faces the right way, on a short synthetic ToF sequence; and a
+track a quarter turn off replaced by a fresh look (``JudgeSettings.look_every``)."""
 import numpy as np
 
 from depthtrack.body import BodyModel
@@ -86,3 +87,43 @@ def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkey
     assert all(s["index"] != wrong_on for s in info["heading_switches"])
     assert not np.any(back_to_front(joints, truth) == 1.0)
     assert point_errors(joints, truth).mean(axis=-1).max() < 0.1
+
+
+def test_a_fresh_look_replaces_a_track_a_quarter_turn_off(squat):
+    """JudgeSettings.look_every: a track started a quarter turn off (the truth's frame-0
+    pose turned 90 degrees about the body's long axis; the loss judge and the front/back
+    recheck off) is replaced by the global search on the first frame due ("look" in the
+    recoveries, 0 frames to recover), and the frames before it are tracked again from there:
+    every frame on the person (up to front and back, the heading recheck's question, off
+    here), frame 0 included. With look_margin 1 (no search is 100 % lower) the search runs
+    on the same frames and is never taken, and frame 0 stays a quarter turn off."""
+    from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+    from depthtrack.track.heading import MODEL_UP, SIDES_SWAPPED
+
+    body = BodyModel.default(height=1.75)
+    x0 = fit_pose_to_joints(body, squat.joints[0])
+    R = rotvec_to_matrix(x0[3:6])
+    x0[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.pi / 2) @ R)[None])[0]
+    base = TrackerSettings().updated({"heading": {"every": 0, "limb_every": 0},
+                                      "judge": {"lost_ratio": 100.0, "look_every": 2},
+                                      "propose": {"lost_frames": 1000}})
+    frames = 5
+    runs = {}
+    for margin in (0.1, 1.0):
+        settings = base.updated({"judge": {"look_margin": margin}})
+        with Tracker(body, squat.camera, settings=settings) as tracker:
+            poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(frames)),
+                                                  init_pose=x0)]
+            joints = np.asarray(body.joint_positions(np.array(poses)))
+        truth = squat.joints[:frames]
+        runs[margin] = (tracker.describe(), np.minimum(    # nearer as is or turned
+            point_errors(joints, truth).mean(axis=-1),
+            point_errors(joints[:, SIDES_SWAPPED], truth).mean(axis=-1)))
+    info, err = runs[0.1]
+    looks = [r for r in info["recoveries"] if r["reason"] == "look"]
+    assert looks and looks[0]["index"] == 2 and looks[0]["frames_to_recover"] == 0
+    assert err.max() < 0.08 and err[0] < 0.05
+    never, err_never = runs[1.0]
+    assert never["counts"]["recoveries_tried"] == 2 and never["counts"]["recoveries"] == 0
+    assert not [r for r in never["recoveries"] if r["reason"] == "look"]
+    assert err_never[0] > 0.2

@@ -86,7 +86,8 @@ def judge_frame(state, cost: float, reason, settings, found=None):
     return {"lost": lost}, {"lost": True}
 
 
-def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained", off=None):
+def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained", off=None,
+            margin: float = 0.0):
     """Global search on ``frame``; taken when it explains more than the tracked ``x``
     (:attr:`JudgeSettings.recover_by`: a lower unexplained share, or a lower energy).
 
@@ -125,9 +126,9 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
         better = off_y < off and y_cost < cost + p.accept_margin
     elif tracker.settings.judge.recover_by == "energy":
         e_y, e_x = tracker.judge_energy()(np.stack([y, x]))
-        better = bool(e_y < e_x)
+        better = bool(e_y < (1.0 - margin) * e_x)
     else:
-        better = y_cost < cost
+        better = y_cost < (1.0 - margin) * cost
     if better:
         tracker.recorder.count("recoveries")
         return True, y, y_cost

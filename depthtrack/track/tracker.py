@@ -43,7 +43,7 @@ from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy, margin_floor, unexplained
 from .evidence import PartModel
-from .heading import CHANNELS_CLEARED
+from .heading import CHANNELS_CLEARED, due
 from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
@@ -287,6 +287,13 @@ class Tracker:
             if recovered:
                 off, misses = proposal_check(self, frame, x, 0)
                 reason = loss_reason(cost, recent, s, misses)
+        elif self.method != "ep" and state.lost is None and due(state, s.judge.look_every):
+            # a fresh look: the global search replaces a track it beats by the margin
+            recovered, x, cost = recover(self, energy, frame, x_prev, x, cost, "look", off,
+                                         margin=s.judge.look_margin)
+            if recovered:
+                found = "look"
+                off, misses = proposal_check(self, frame, x, 0)
         changes, flags = judge_frame(state, cost, reason, s, found)
         velocity = (np.zeros(self.body.dof) if recovered or switched
                     else pose_velocity(x_prev, x))
