@@ -96,6 +96,9 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
     doubt, the search starts as a first frame does, and its pose is taken when the proposals
     disagree with it less and it leaves at most :attr:`ProposalSettings.accept_margin` more
     of the observation unexplained (``off``: ``x``'s disagreeing share, :func:`proposal_check`).
+    ``margin``: by what fraction the search's score must be lower than ``x``'s (0 for a
+    loss; :attr:`JudgeSettings.look_margin` for a fresh look, ``reason`` ``"look"``, whose
+    searches count in ``recoveries_tried`` and time under ``recover`` like a loss's).
 
     Returns
     -------
