@@ -3,6 +3,7 @@
 injected into a track that faces the right way, on a short synthetic ToF sequence; and a
 track a quarter turn off replaced by a fresh look (``JudgeSettings.look_every``)."""
 import numpy as np
+import pytest
 
 from depthtrack.body import BodyModel
 from depthtrack.evaluate.metrics import point_errors
@@ -96,7 +97,9 @@ def test_a_fresh_look_replaces_a_track_a_quarter_turn_off(squat):
     recoveries, 0 frames to recover), and the frames before it are tracked again from there:
     every frame on the person (up to front and back, the heading recheck's question, off
     here), frame 0 included. With look_margin 1 (no search is 100 % lower) the search runs
-    on the same frames and is never taken, and frame 0 stays a quarter turn off."""
+    on the same frames and is never taken, and frame 0 stays a quarter turn off; so with
+    look_turn 30 degrees (the search's pose faces about 90 degrees from the track's): every
+    look refused and counted in looks_turned_away."""
     from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
     from depthtrack.track.heading import MODEL_UP, SIDES_SWAPPED
 
@@ -109,21 +112,44 @@ def test_a_fresh_look_replaces_a_track_a_quarter_turn_off(squat):
                                       "propose": {"lost_frames": 1000}})
     frames = 5
     runs = {}
-    for margin in (0.1, 1.0):
-        settings = base.updated({"judge": {"look_margin": margin}})
+    for margin, turn in ((0.1, 120.0), (1.0, 120.0), (0.1, 30.0)):
+        settings = base.updated({"judge": {"look_margin": margin, "look_turn": turn}})
         with Tracker(body, squat.camera, settings=settings) as tracker:
             poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(frames)),
                                                   init_pose=x0)]
             joints = np.asarray(body.joint_positions(np.array(poses)))
         truth = squat.joints[:frames]
-        runs[margin] = (tracker.describe(), np.minimum(    # nearer as is or turned
+        runs[margin, turn] = (tracker.describe(), np.minimum(    # nearer as is or turned
             point_errors(joints, truth).mean(axis=-1),
             point_errors(joints[:, SIDES_SWAPPED], truth).mean(axis=-1)))
-    info, err = runs[0.1]
+    info, err = runs[0.1, 120.0]
     looks = [r for r in info["recoveries"] if r["reason"] == "look"]
     assert looks and looks[0]["index"] == 2 and looks[0]["frames_to_recover"] == 0
     assert err.max() < 0.08 and err[0] < 0.05
-    never, err_never = runs[1.0]
+    never, err_never = runs[1.0, 120.0]
     assert never["counts"]["recoveries_tried"] == 2 and never["counts"]["recoveries"] == 0
     assert not [r for r in never["recoveries"] if r["reason"] == "look"]
     assert err_never[0] > 0.2
+    away, err_away = runs[0.1, 30.0]
+    assert away["counts"]["looks_turned_away"] == 2 and away["counts"]["recoveries"] == 0
+    assert not [r for r in away["recoveries"] if r["reason"] == "look"]
+    assert err_away[0] > 0.2
+
+
+def test_look_turn_is_the_angle_between_the_root_forward_directions():
+    """judge.look_turn_deg: 0 for a pose itself, the turn for the pose turned about its long
+    axis (90, 180), whatever the pose's own orientation."""
+    from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+    from depthtrack.track.heading import MODEL_UP
+    from depthtrack.track.judge import look_turn_deg
+
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        x = np.zeros(48)
+        x[3:6] = rng.normal(size=3)
+        R = rotvec_to_matrix(x[3:6])
+        assert look_turn_deg(x, x) == pytest.approx(0.0, abs=1e-4)
+        for deg in (90.0, 180.0):
+            y = x.copy()
+            y[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.radians(deg)) @ R)[None])[0]
+            assert look_turn_deg(x, y) == pytest.approx(deg, abs=1e-3)

@@ -86,8 +86,16 @@ def judge_frame(state, cost: float, reason, settings, found=None):
     return {"lost": lost}, {"lost": True}
 
 
+def look_turn_deg(a, b) -> float:
+    """Degrees (0 to 180) between the root forward directions of poses ``a`` and ``b`` (48,):
+    about 180 for a pose and its turned twin."""
+    fa, fb = facing_direction(a), facing_direction(b)
+    cos = float(fa @ fb) / max(float(np.linalg.norm(fa) * np.linalg.norm(fb)), 1e-12)
+    return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+
 def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained", off=None,
-            margin: float = 0.0):
+            margin: float = 0.0, max_turn: float = 180.0):
     """Global search on ``frame``; taken when it explains more than the tracked ``x``
     (:attr:`JudgeSettings.recover_by`: a lower unexplained share, or a lower energy).
 
@@ -99,6 +107,9 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
     ``margin``: by what fraction the search's score must be lower than ``x``'s (0 for a
     loss; :attr:`JudgeSettings.look_margin` for a fresh look, ``reason`` ``"look"``, whose
     searches count in ``recoveries_tried`` and time under ``recover`` like a loss's).
+    ``max_turn``: the most degrees the search's pose may face away from ``x`` (root forward
+    directions, :func:`look_turn_deg`) and be taken (180 = any; a fresh look's is
+    :attr:`JudgeSettings.look_turn`; one refused so counts in ``looks_turned_away``).
 
     Returns
     -------
@@ -123,6 +134,9 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
     y_cost = unexplained(energy, y)
     tracker.recorder.add("recover", time.perf_counter() - t)
     tracker.recorder.count("recoveries_tried")
+    if look_turn_deg(y, x) > max_turn:
+        tracker.recorder.count("looks_turned_away")
+        return False, x, cost
     if doubted:
         p = tracker.settings.propose
         off_y, _ = proposal_check(tracker, frame, y, 0)

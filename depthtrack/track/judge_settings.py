@@ -41,7 +41,12 @@ class JudgeSettings:
     reported as a recovery with reason ``"look"`` and re-tracked backwards like one. A track
     that settled a quarter turn off explains the image nearly as well as it can from there,
     so its unexplained share never jumps (dev probe: 105_05 from 90 degrees seed 1, 53.5 ->
-    91.3 %; about a third more time a frame at 8; README, "A fresh look").
+    91.3 %; about a third more time a frame at 8; README, "A fresh look"). ``look_turn``:
+    the most degrees the look's pose may face away from the track's (root forward directions)
+    and be taken: a half turn is the front/back recheck's call, made on its votes over frames
+    and re-tracked, not one search's (dev 05_20 seed 3: a look took the turned twin on frame
+    48, 78.8 -> 51.9 %; README, "A fresh look"). A look refused so counts in
+    ``counts.looks_turned_away``.
     """
 
     lost_ratio: float = 1.6
@@ -51,11 +56,14 @@ class JudgeSettings:
     recover_by: str = "energy"
     look_every: int = 0
     look_margin: float = 0.1
+    look_turn: float = 120.0
 
     def __post_init__(self):
         _positive(self, "lost_ratio", "window", "max_lost_frames")
         _positive(self, "lost_margin", "look_every", "look_margin", allow_zero=True)
         _one_of(self, "recover_by", RECOVER_BY)
+        _check(0.0 <= float(self.look_turn) <= 180.0,
+               f"JudgeSettings.look_turn must be 0 to 180 degrees, not {self.look_turn!r}")
 
 
 @dataclass(frozen=True)

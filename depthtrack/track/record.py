@@ -14,10 +14,11 @@ STAGES = ("segment", "render", "detect", "evidence", "search", "association", "i
           "heading", "propose", "reach", "reseat", "polish", "final")
 #: Counters. ``correspondences`` / ``accepted`` count every correspondence the association
 #: tried / kept; ``proposal_correspondences`` / ``proposal_accepted`` those of them from the
-#: recogniser's joint proposals (``ProposalSettings.evidence``).
+#: recogniser's joint proposals (``ProposalSettings.evidence``); ``looks_turned_away`` the
+#: fresh looks whose pose faced too far from the track's (``JudgeSettings.look_turn``).
 COUNTS = ("candidates", "render_calls", "detections", "correspondences", "accepted",
           "recoveries_tried", "recoveries", "frames_without_person", "reinitialisations",
-          "proposal_correspondences", "proposal_accepted")
+          "proposal_correspondences", "proposal_accepted", "looks_turned_away")
 
 
 class Recorder:

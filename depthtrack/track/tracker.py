@@ -290,7 +290,7 @@ class Tracker:
         elif self.method != "ep" and state.lost is None and due(state, s.judge.look_every):
             # a fresh look: the global search replaces a track it beats by the margin
             recovered, x, cost = recover(self, energy, frame, x_prev, x, cost, "look", off,
-                                         margin=s.judge.look_margin)
+                                         margin=s.judge.look_margin, max_turn=s.judge.look_turn)
             if recovered:
                 found = "look"
                 off, misses = proposal_check(self, frame, x, 0)
