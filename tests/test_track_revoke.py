@@ -153,3 +153,19 @@ def test_look_turn_is_the_angle_between_the_root_forward_directions():
             y = x.copy()
             y[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.radians(deg)) @ R)[None])[0]
             assert look_turn_deg(x, y) == pytest.approx(deg, abs=1e-3)
+
+
+def test_the_start_checks_tracks_take_no_fresh_look(squat):
+    """judge.NO_LOOK: the start check's two tracks each test one heading and run without
+    fresh looks. Looking on every frame (look_every 1) over six frames with a two-frame start
+    check, only the two frames tracked after the check get the look's search (start on 0,
+    check on 1 and 2 for each heading, forward 3 to 5: three searches, not seven)."""
+    body = BodyModel.default(height=1.75)
+    settings = TrackerSettings().updated({"heading": {"frames": 2, "min_frames": 2},
+                                          "judge": {"look_every": 1, "lost_ratio": 100.0},
+                                          "propose": {"lost_frames": 1000}})
+    with Tracker(body, squat.camera, settings=settings) as tracker:
+        poses = [x for _, x in tracker.stream(squat.depth(j) for j in range(6))]
+        info, check = tracker.describe(), tracker.state.init_info["heading_check"]
+    assert len(poses) == 6 and check["frames"] == 2
+    assert info["counts"]["recoveries_tried"] == 3

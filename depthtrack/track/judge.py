@@ -24,6 +24,13 @@ from .heading import facing_direction, long_axis
 from .proposals import disagreement, frame_proposals
 from .start import global_search
 
+#: Laid over the settings (``TrackerSettings.updated``) for the tracks that test one
+#: hypothesis: the start check's two tracks and a re-track's backward track. A fresh look
+#: (:attr:`JudgeSettings.look_every`) there asks the forward track's question of a test's
+#: track and may turn the hypothesis under test into the other (dev 05_20 seed 3: a look
+#: inside the backward track after a switch on frame 44 met the forward heading, so the
+#: wrong switch stood; README, "A fresh look").
+NO_LOOK = {"judge": {"look_every": 0}}
 
 def is_lost(cost: float, recent, settings) -> bool:
     """Whether ``cost`` jumped above the ``recent`` unexplained shares (see :class:`JudgeSettings`)."""

@@ -14,6 +14,7 @@ import itertools
 import numpy as np
 
 from .heading import settle_heading
+from .judge import NO_LOOK
 from .observation import cut_by_border
 from .observe import as_depth, person_present, visible_area
 from .retrack import (CORRECTION_ORDER, new_correction, reach_after, retrack_before_correction,
@@ -100,7 +101,7 @@ def stream_poses(tracker, frames, init_pose=None):
                 ahead = take(K) if K > 0 else []
                 settled = None
                 if K > 0 and len(ahead) >= min(K, s.heading.min_frames):
-                    settled = settle_heading(tracker.state, ahead, tracker.track_through,
+                    settled = settle_heading(tracker.state, ahead, _test_track(tracker),
                                              tracker.turned_start(frame), s)
                 if settled is not None:
                     tracker.state, poses = settled
@@ -166,6 +167,19 @@ def _complete_view(tracker, depth, foreground, take, pending):
     if k == 0:
         return depth, foreground, []
     return ahead[k - 1], foregrounds[k], [depth, *ahead[:k - 1]]
+
+
+def _test_track(tracker):
+    """``tracker.track_through`` without fresh looks (:data:`.judge.NO_LOOK`), for the start
+    check's two tracks: each tests one heading."""
+    def track(state, depths):
+        settings = tracker.settings
+        tracker.settings = settings.updated(NO_LOOK)
+        try:
+            return tracker.track_through(state, depths)
+        finally:
+            tracker.settings = settings
+    return track
 
 
 #: The state's event lists (each entry a dict with the log index ``frame``) that a backward

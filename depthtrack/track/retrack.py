@@ -12,6 +12,7 @@ import numpy as np
 
 from ..body.facing import back_to_front, sides_exchanged
 from .heading import CHANNELS_CLEARED, LIMB_SWAPS
+from .judge import NO_LOOK
 
 
 #: Which corrections :func:`new_correction` reports, first the one a frame's re-track
@@ -78,7 +79,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     (:attr:`HeadingSettings.retro_frames`, ``retro_after``).
 
     The backward track runs with the recheck that made the correction off (it must keep the
-    correction's choice, :data:`RETRO_OFF`) through ``recent`` ``[(index, depth), ...]``
+    correction's choice, :data:`RETRO_OFF`) and without fresh looks (:data:`.judge.NO_LOOK`) through ``recent`` ``[(index, depth), ...]``
     from the newest down, and stops at ``lowest`` (the start, or the frame after an earlier
     re-tracked correction, :func:`reach_after`), at a pose already yielded or dropped, at a
     lost track, or where the forward track already has what the correction gave
@@ -112,7 +113,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     shares = {e["index"]: e.get("cost") for e in corrected.log[-(len(recent) + 2):] if "index" in e}
     state, poses, indices, backward, judged = corrected, [], [], [], []
     stopped = None
-    tracker.settings = settings.updated({"heading": RETRO_OFF[kind]})
+    tracker.settings = settings.updated({"heading": RETRO_OFF[kind], **NO_LOOK})
     try:
         for index, depth in reversed(recent):
             k = where.get(index)
