@@ -11,6 +11,9 @@ from .setting_checks import one_of as _one_of
 from .setting_checks import positive as _positive
 
 
+#: Which fresh looks their re-track takes back (:attr:`JudgeSettings.look_revoke`; the
+#: rules of :func:`.retrack.revokes`).
+LOOK_REVOKES = ("never", "refused", "unsupported", "outscored")
 #: What a recovery's pose is judged by (:attr:`JudgeSettings.recover_by`).
 RECOVER_BY = ("unexplained", "energy")
 
@@ -46,7 +49,13 @@ class JudgeSettings:
     and be taken: a half turn is the front/back recheck's call, made on its votes over frames
     and re-tracked, not one search's (dev 05_20 seed 3: a look took the turned twin on frame
     48, 78.8 -> 51.9 %; README, "A fresh look"). A look refused so counts in
-    ``counts.looks_turned_away``.
+    ``counts.looks_turned_away``. ``look_revoke``: the :data:`LOOK_REVOKES` rule that takes a
+    look back once its re-track (:attr:`HeadingSettings.retro_after` with ``"recovery"``) has
+    tracked the frames before it from the look's pose, as ``retro_revoke`` does a heading
+    switch: ``"outscored"``, taken back when those frames score worse in sum and better on
+    fewer than half of them (a look is one frame's energy; the frames before it must bear it
+    out: dev 90_05 seed 3, a look on frame 16 10 cm further from the truth on the frames it
+    re-tracked, 82.4 -> 55.1 %); ``"never"``, as before 2026-11-29.
     """
 
     lost_ratio: float = 1.6
@@ -57,11 +66,13 @@ class JudgeSettings:
     look_every: int = 0
     look_margin: float = 0.1
     look_turn: float = 120.0
+    look_revoke: str = "outscored"
 
     def __post_init__(self):
         _positive(self, "lost_ratio", "window", "max_lost_frames")
         _positive(self, "lost_margin", "look_every", "look_margin", allow_zero=True)
         _one_of(self, "recover_by", RECOVER_BY)
+        _one_of(self, "look_revoke", LOOK_REVOKES)
         _check(0.0 <= float(self.look_turn) <= 180.0,
                f"JudgeSettings.look_turn must be 0 to 180 degrees, not {self.look_turn!r}")
 

@@ -79,7 +79,8 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     (:attr:`HeadingSettings.retro_frames`, ``retro_after``).
 
     The backward track runs with the recheck that made the correction off (it must keep the
-    correction's choice, :data:`RETRO_OFF`) and without fresh looks (:data:`.judge.NO_LOOK`) through ``recent`` ``[(index, depth), ...]``
+    correction's choice, :data:`RETRO_OFF`) and without fresh looks (:data:`.judge.NO_LOOK`)
+    through ``recent`` ``[(index, depth), ...]``
     from the newest down, and stops at ``lowest`` (the start, or the frame after an earlier
     re-tracked correction, :func:`reach_after`), at a pose already yielded or dropped, at a
     lost track, or where the forward track already has what the correction gave
@@ -101,9 +102,9 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     goes on as it would have. The entry's ``frames_better`` counts the frames next to the
     correction where the backward track did better (:func:`best_prefix` without a margin).
 
-    Returns whether the correction, a heading switch, is to be taken back
-    (:attr:`HeadingSettings.retro_revoke`, :func:`revokes`; then no frame is taken, and
-    the caller runs :func:`revoke_switch`).
+    Returns whether the correction, a heading switch or a fresh look, is to be taken back
+    (:attr:`HeadingSettings.retro_revoke`, :attr:`JudgeSettings.look_revoke`, :func:`revokes`;
+    then no frame is taken, and the caller runs :func:`revoke_switch`).
     """
     settings = tracker.settings
     h = settings.heading
@@ -149,9 +150,11 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         # (a track given up on scores above the margin over the frames it reached)
         n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              better if h.retro_take == "prefix" else 0)
-        revoke = kind == "heading" and revokes(
-            revoke_rule(h, corrected.heading_switches[-1]), n, better, len(indices),
-            outscored=e_back > e_forward, met=stopped == STOP_LABELS["heading"])
+        rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
+                settings.judge.look_revoke if kind == "recovery" and _was_look(corrected)
+                else "never")
+        revoke = revokes(rule, n, better, len(indices), outscored=e_back > e_forward,
+                         met=stopped == STOP_LABELS["heading"])
         n = 0 if revoke else n
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
@@ -163,6 +166,11 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             held[where[index]] = (index, x)
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
     return revoke
+
+
+def _was_look(state) -> bool:
+    """Whether ``state``'s newest recovery is a fresh look (reason ``"look"``)."""
+    return bool(state.recoveries) and state.recoveries[-1].get("reason") == "look"
 
 
 def revoke_rule(heading, switch: dict) -> str:
@@ -244,27 +252,33 @@ def gave_up(judged, margin: float, frames: int) -> bool:
 
 
 def revoke_switch(tracker, held, before, depth, index: int) -> bool:
-    """Take back the heading switch on frame ``index`` whose re-track :func:`revokes` it
-    (:attr:`HeadingSettings.retro_revoke`): frame ``index`` tracked again from ``before``
-    (the state before it) with the heading recheck off, the recheck's votes and evidence
-    cleared, so the twin must win again from nothing to switch again.
+    """Take back the heading switch or fresh look on frame ``index`` whose re-track
+    :func:`revokes` it (:attr:`HeadingSettings.retro_revoke`, :attr:`JudgeSettings.look_revoke`):
+    frame ``index`` tracked again from ``before`` (the state before it) -- after a switch
+    with the heading recheck off and the recheck's votes and evidence cleared, so the twin
+    must win again from nothing to switch again; after a look without the look.
 
     A right switch is continuous with the frames before it: tracked back from the turned
     pose, they score about as well as the forward poses (before a switch the two headings
     explain a frame alike, or the recheck would have turned sooner), and the frames next to
     it better (:func:`best_prefix`). A switch whose backward track scores worse from the
-    first frame back says the twin's lead on the switch's frame was noise.
+    first frame back says the twin's lead on the switch's frame was noise. So for a look:
+    one frame's energy lower by the margin, but the frames before it explained worse from
+    its pose than the track explained them.
 
     ``held[-1]`` (frame ``index``'s pose) is replaced; the tracker's state becomes the
-    unswitched one with the re-track entry, ``revoked: true``, appended to its
-    ``retracks``. Returns False, the switch standing (and no backward frame taken), when
-    the unswitched track is dropped on that frame.
+    unswitched one with the re-track entry, ``revoked: true`` and the ``switch`` (or the
+    look's ``recovery`` entry), appended to its ``retracks``. Returns False, the correction
+    standing (and no backward frame taken), when the track without it is dropped on that
+    frame.
     """
     settings = tracker.settings
+    look = _was_look(tracker.state)
+    corrected = (tracker.state.recoveries[-1] if look else tracker.state.heading_switches[-1])
     entry = {**tracker.state.retracks[-1], "revoked": True,
-             "switch": {k: v for k, v in tracker.state.heading_switches[-1].items()
-                        if k != "frame"}}
-    tracker.settings = settings.updated({"heading": RETRO_OFF["heading"]})
+             ("recovery" if look else "switch"): {k: v for k, v in corrected.items()
+                                                  if k != "frame"}}
+    tracker.settings = settings.updated(NO_LOOK if look else {"heading": RETRO_OFF["heading"]})
     try:
         state, x = tracker.advance(before, depth)
     finally:
@@ -272,6 +286,6 @@ def revoke_switch(tracker, held, before, depth, index: int) -> bool:
     if x is None:
         return False
     held[-1] = (index, x)
-    tracker.state = state.replace(**CHANNELS_CLEARED,
-                                  retracks=state.retracks + (entry,))
+    cleared = {} if look else CHANNELS_CLEARED
+    tracker.state = state.replace(**cleared, retracks=state.retracks + (entry,))
     return True
