@@ -169,3 +169,37 @@ def test_the_start_checks_tracks_take_no_fresh_look(squat):
         info, check = tracker.describe(), tracker.state.init_info["heading_check"]
     assert len(poses) == 6 and check["frames"] == 2
     assert info["counts"]["recoveries_tried"] == 3
+
+
+def test_a_look_its_rule_takes_back_leaves_the_track_as_it_was(squat, monkeypatch):
+    """JudgeSettings.look_revoke: a look whose re-track the rule takes back (here every one:
+    the rule itself is tested in closed form above) is gone from the recoveries, its frame
+    tracked again without it, and its entry kept in the re-track's ``recovery`` with
+    ``revoked``; the start a quarter turn off then stays so, as with no look taken."""
+    from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+    from depthtrack.track import retrack
+    from depthtrack.track.heading import MODEL_UP
+
+    rules = []
+
+    def every_look(rule, *args, **kwargs):
+        rules.append(rule)
+        return rule != "never"
+    monkeypatch.setattr(retrack, "revokes", every_look)
+    body = BodyModel.default(height=1.75)
+    x0 = fit_pose_to_joints(body, squat.joints[0])
+    R = rotvec_to_matrix(x0[3:6])
+    x0[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.pi / 2) @ R)[None])[0]
+    settings = TrackerSettings().updated({"heading": {"every": 0, "limb_every": 0},
+                                          "judge": {"lost_ratio": 100.0, "look_every": 2},
+                                          "propose": {"lost_frames": 1000}})
+    with Tracker(body, squat.camera, settings=settings) as tracker:
+        poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(5)), init_pose=x0)]
+        info = tracker.describe()
+    assert "outscored" in rules                       # the default look_revoke judged a look
+    assert not [r for r in info["recoveries"] if r["reason"] == "look"]
+    revoked = [r for r in info["retracks"] if r.get("revoked")]
+    assert revoked and all(r["recovery"]["reason"] == "look" and r["kind"] == "recovery"
+                           for r in revoked)
+    joints = np.asarray(body.joint_positions(np.array(poses)))
+    assert point_errors(joints[:1], squat.joints[:1]).mean() > 0.2
