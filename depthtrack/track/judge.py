@@ -32,6 +32,7 @@ from .start import global_search
 #: wrong switch stood; README, "A fresh look").
 NO_LOOK = {"judge": {"look_every": 0}}
 
+
 def is_lost(cost: float, recent, settings) -> bool:
     """Whether ``cost`` jumped above the ``recent`` unexplained shares (see :class:`JudgeSettings`)."""
     if len(recent) < 1:
