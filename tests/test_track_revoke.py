@@ -136,11 +136,12 @@ def test_a_fresh_look_replaces_a_track_a_quarter_turn_off(squat):
     assert err_away[0] > 0.2
 
 
-def test_look_turn_is_the_angle_between_the_root_forward_directions():
+def test_look_turn_is_how_far_the_root_is_turned_front_for_back_or_head_for_feet():
     """judge.look_turn_deg: 0 for a pose itself, the turn for the pose turned about its long
-    axis (90, 180), whatever the pose's own orientation."""
+    axis (front for back) or about its forward direction (head for feet, in the image plane
+    of a body facing the camera), 90 and 180 degrees, whatever the pose's own orientation."""
     from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
-    from depthtrack.track.heading import MODEL_UP
+    from depthtrack.track.heading import MODEL_FORWARD, MODEL_UP
     from depthtrack.track.judge import look_turn_deg
 
     rng = np.random.default_rng(3)
@@ -149,10 +150,11 @@ def test_look_turn_is_the_angle_between_the_root_forward_directions():
         x[3:6] = rng.normal(size=3)
         R = rotvec_to_matrix(x[3:6])
         assert look_turn_deg(x, x) == pytest.approx(0.0, abs=1e-4)
-        for deg in (90.0, 180.0):
-            y = x.copy()
-            y[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.radians(deg)) @ R)[None])[0]
-            assert look_turn_deg(x, y) == pytest.approx(deg, abs=1e-3)
+        for axis in (MODEL_UP, MODEL_FORWARD):    # front for back; head for feet
+            for deg in (90.0, 180.0):
+                y = x.copy()
+                y[3:6] = matrix_to_rotvec((rotation_about(R @ axis, np.radians(deg)) @ R)[None])[0]
+                assert look_turn_deg(x, y) == pytest.approx(deg, abs=1e-3)
 
 
 def test_the_start_checks_tracks_take_no_fresh_look(squat):

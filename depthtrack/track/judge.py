@@ -95,11 +95,16 @@ def judge_frame(state, cost: float, reason, settings, found=None):
 
 
 def look_turn_deg(a, b) -> float:
-    """Degrees (0 to 180) between the root forward directions of poses ``a`` and ``b`` (48,):
-    about 180 for a pose and its turned twin."""
-    fa, fb = facing_direction(a), facing_direction(b)
-    cos = float(fa @ fb) / max(float(np.linalg.norm(fa) * np.linalg.norm(fb)), 1e-12)
-    return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    """Degrees (0 to 180) poses ``a`` and ``b`` (48,) are turned from each other: the larger
+    of the angles between their root forward directions and between their long axes
+    (:func:`.heading.facing_direction`, :func:`.heading.long_axis`). About 180 for a pose
+    and its turned twin (front and back swapped) and for the pose upside down in the image
+    plane (a cartwheel's star read head for feet: the forward direction kept)."""
+    def angle(u, v):
+        cos = float(u @ v) / max(float(np.linalg.norm(u) * np.linalg.norm(v)), 1e-12)
+        return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    return max(angle(facing_direction(a), facing_direction(b)),
+               angle(long_axis(a), long_axis(b)))
 
 
 def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplained", off=None,
@@ -115,8 +120,8 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
     ``margin``: by what fraction the search's score must be lower than ``x``'s (0 for a
     loss; :attr:`JudgeSettings.look_margin` for a fresh look, ``reason`` ``"look"``, whose
     searches count in ``recoveries_tried`` and time under ``recover`` like a loss's).
-    ``max_turn``: the most degrees the search's pose may face away from ``x`` (root forward
-    directions, :func:`look_turn_deg`) and be taken (180 = any; a fresh look's is
+    ``max_turn``: the most degrees the search's pose may be turned from ``x`` (root forward
+    directions and long axes, :func:`look_turn_deg`) and be taken (180 = any; a fresh look's is
     :attr:`JudgeSettings.look_turn`; one refused so counts in ``looks_turned_away``).
 
     Returns
