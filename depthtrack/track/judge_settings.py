@@ -48,10 +48,10 @@ class JudgeSettings:
     the most degrees the look's pose may be turned from the track's (the larger of the angles
     between their root forward directions and between their long axes) and be taken: a half
     turn front for back is the front/back recheck's call, made on its votes over frames and
-    re-tracked, not one search's; a body read head for feet (a cartwheel's star upside down:
-    the forward direction kept) is the proposals' (dev wide cartwheel seed 2: a look on frame
-    16 took the star upside down and re-tracked 16 frames from it, 89.4 -> 72.8 %; README,
-    "A fresh look"). A look refused so counts in ``counts.looks_turned_away``. ``look_revoke``: the :data:`LOOK_REVOKES` rule that takes a
+    re-tracked, not one search's, and a body read head for feet (a cartwheel's star upside
+    down: the forward direction kept) the proposals' (README, "A fresh look"). A look
+    refused so counts in ``counts.looks_turned_away``. A look's re-track sets no floor for
+    later re-tracks (:func:`.retrack.was_look`). ``look_revoke``: the :data:`LOOK_REVOKES` rule that takes a
     look back once its re-track (:attr:`HeadingSettings.retro_after` with ``"recovery"``) has
     tracked the frames before it from the look's pose, as ``retro_revoke`` does a heading
     switch: ``"outscored"``, taken back when those frames score worse in sum and better on

@@ -18,7 +18,7 @@ from .judge import NO_LOOK
 from .observation import cut_by_border
 from .observe import as_depth, person_present, visible_area
 from .retrack import (CORRECTION_ORDER, new_correction, reach_after, retrack_before_correction,
-                      revoke_switch)
+                      revoke_switch, was_look)
 from .settings import TrackerSettings
 from .state import TrackedFrame
 from .tracker import Tracker
@@ -72,9 +72,12 @@ def stream_poses(tracker, frames, init_pose=None):
             _advance_into(tracker, held, i, depth)
             kind = new_correction(before, tracker.state, s.heading.retro_after) if retro else None
             if kind is not None and tracker.state.pose is not None:
+                look = kind == "recovery" and was_look(tracker.state)
                 revoked = (retrack_before_correction(tracker, held, recent, lowest[kind], i, kind)
                            and revoke_switch(tracker, held, before, depth, i))
-                if not revoked:
+                # a look's re-track sets no floor: a later correction's re-track, on its own
+                # evidence, may go back past it (JudgeSettings.look_every)
+                if not revoked and not look:
                     lowest = reach_after(lowest, kind, i, s.heading.retro_stop)
             recent.append((i, depth))
         else:

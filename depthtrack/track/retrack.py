@@ -151,7 +151,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              better if h.retro_take == "prefix" else 0)
         rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
-                settings.judge.look_revoke if kind == "recovery" and _was_look(corrected)
+                settings.judge.look_revoke if kind == "recovery" and was_look(corrected)
                 else "never")
         revoke = revokes(rule, n, better, len(indices), outscored=e_back > e_forward,
                          met=stopped == STOP_LABELS["heading"])
@@ -168,8 +168,12 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     return revoke
 
 
-def _was_look(state) -> bool:
-    """Whether ``state``'s newest recovery is a fresh look (reason ``"look"``)."""
+def was_look(state) -> bool:
+    """Whether ``state``'s newest recovery is a fresh look (reason ``"look"``). A look's
+    re-track sets no floor for later re-tracks (:func:`reach_after` is not called for it):
+    a look is one frame's energy, and a later correction on its own evidence may go back past
+    it (dev wide cartwheel seed 2: the proposals' recovery on frame 21 re-tracked only to frame
+    17, past a look on 16 that had kept the star upside down, 89.4 -> 72.8 %)."""
     return bool(state.recoveries) and state.recoveries[-1].get("reason") == "look"
 
 
@@ -273,7 +277,7 @@ def revoke_switch(tracker, held, before, depth, index: int) -> bool:
     frame.
     """
     settings = tracker.settings
-    look = _was_look(tracker.state)
+    look = was_look(tracker.state)
     corrected = (tracker.state.recoveries[-1] if look else tracker.state.heading_switches[-1])
     entry = {**tracker.state.retracks[-1], "revoked": True,
              ("recovery" if look else "switch"): {k: v for k, v in corrected.items()
