@@ -90,6 +90,23 @@ def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkey
     assert point_errors(joints, truth).mean(axis=-1).max() < 0.1
 
 
+def _a_start_a_quarter_turn_off(squat):
+    """``(body, x0 (48,), settings)``: the truth's frame-0 pose turned 90 degrees about the
+    body's long axis, and settings that look every other frame with the loss judge, the
+    proposals' loss and the front/back and limb rechecks off."""
+    from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
+    from depthtrack.track.heading import MODEL_UP
+
+    body = BodyModel.default(height=1.75)
+    x0 = fit_pose_to_joints(body, squat.joints[0])
+    R = rotvec_to_matrix(x0[3:6])
+    x0[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.pi / 2) @ R)[None])[0]
+    settings = TrackerSettings().updated({"heading": {"every": 0, "limb_every": 0},
+                                          "judge": {"lost_ratio": 100.0, "look_every": 2},
+                                          "propose": {"lost_frames": 1000}})
+    return body, x0, settings
+
+
 def test_a_fresh_look_replaces_a_track_a_quarter_turn_off(squat):
     """JudgeSettings.look_every: a track started a quarter turn off (the truth's frame-0
     pose turned 90 degrees about the body's long axis; the loss judge and the front/back
@@ -100,16 +117,9 @@ def test_a_fresh_look_replaces_a_track_a_quarter_turn_off(squat):
     on the same frames and is never taken, and frame 0 stays a quarter turn off; so with
     look_turn 30 degrees (the search's pose faces about 90 degrees from the track's): every
     look refused and counted in looks_turned_away."""
-    from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
-    from depthtrack.track.heading import MODEL_UP, SIDES_SWAPPED
+    from depthtrack.track.heading import SIDES_SWAPPED
 
-    body = BodyModel.default(height=1.75)
-    x0 = fit_pose_to_joints(body, squat.joints[0])
-    R = rotvec_to_matrix(x0[3:6])
-    x0[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.pi / 2) @ R)[None])[0]
-    base = TrackerSettings().updated({"heading": {"every": 0, "limb_every": 0},
-                                      "judge": {"lost_ratio": 100.0, "look_every": 2},
-                                      "propose": {"lost_frames": 1000}})
+    body, x0, base = _a_start_a_quarter_turn_off(squat)
     frames = 5
     runs = {}
     for margin, turn in ((0.1, 120.0), (1.0, 120.0), (0.1, 30.0)):
@@ -178,9 +188,7 @@ def test_a_look_its_rule_takes_back_leaves_the_track_as_it_was(squat, monkeypatc
     the rule itself is tested in closed form above) is gone from the recoveries, its frame
     tracked again without it, and its entry kept in the re-track's ``recovery`` with
     ``revoked``; the start a quarter turn off then stays so, as with no look taken."""
-    from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
     from depthtrack.track import retrack
-    from depthtrack.track.heading import MODEL_UP
 
     rules = []
 
@@ -188,13 +196,7 @@ def test_a_look_its_rule_takes_back_leaves_the_track_as_it_was(squat, monkeypatc
         rules.append(rule)
         return rule != "never"
     monkeypatch.setattr(retrack, "revokes", every_look)
-    body = BodyModel.default(height=1.75)
-    x0 = fit_pose_to_joints(body, squat.joints[0])
-    R = rotvec_to_matrix(x0[3:6])
-    x0[3:6] = matrix_to_rotvec((rotation_about(R @ MODEL_UP, np.pi / 2) @ R)[None])[0]
-    settings = TrackerSettings().updated({"heading": {"every": 0, "limb_every": 0},
-                                          "judge": {"lost_ratio": 100.0, "look_every": 2},
-                                          "propose": {"lost_frames": 1000}})
+    body, x0, settings = _a_start_a_quarter_turn_off(squat)
     with Tracker(body, squat.camera, settings=settings) as tracker:
         poses = [x for _, x in tracker.stream((squat.depth(j) for j in range(5)), init_pose=x0)]
         info = tracker.describe()
