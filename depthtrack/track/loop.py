@@ -176,12 +176,8 @@ def _test_track(tracker):
     """``tracker.track_through`` without fresh looks (:data:`.judge.NO_LOOK`), for the start
     check's two tracks: each tests one heading."""
     def track(state, depths):
-        settings = tracker.settings
-        tracker.settings = settings.updated(NO_LOOK)
-        try:
+        with tracker.settings_overlaid(NO_LOOK):
             return tracker.track_through(state, depths)
-        finally:
-            tracker.settings = settings
     return track
 
 

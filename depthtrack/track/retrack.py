@@ -114,8 +114,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     shares = {e["index"]: e.get("cost") for e in corrected.log[-(len(recent) + 2):] if "index" in e}
     state, poses, indices, backward, judged = corrected, [], [], [], []
     stopped = None
-    tracker.settings = settings.updated({"heading": RETRO_OFF[kind], **NO_LOOK})
-    try:
+    with tracker.settings_overlaid({"heading": RETRO_OFF[kind], **NO_LOOK}):
         for index, depth in reversed(recent):
             k = where.get(index)
             stopped = ("start or switch" if index < lowest else "yielded" if k is None else
@@ -139,8 +138,6 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             if gave_up(judged, h.retro_margin, h.retro_give_up):
                 stopped = "worse"
                 break
-    finally:
-        tracker.settings = settings
     entry = {"kind": kind, "index": at, "frames": len(indices),
              "stopped": stopped or "window", "taken": False}
     revoke = False
@@ -276,17 +273,13 @@ def revoke_switch(tracker, held, before, depth, index: int) -> bool:
     standing (and no backward frame taken), when the track without it is dropped on that
     frame.
     """
-    settings = tracker.settings
     look = was_look(tracker.state)
     corrected = (tracker.state.recoveries[-1] if look else tracker.state.heading_switches[-1])
     entry = {**tracker.state.retracks[-1], "revoked": True,
              ("recovery" if look else "switch"): {k: v for k, v in corrected.items()
                                                   if k != "frame"}}
-    tracker.settings = settings.updated(NO_LOOK if look else {"heading": RETRO_OFF["heading"]})
-    try:
+    with tracker.settings_overlaid(NO_LOOK if look else {"heading": RETRO_OFF["heading"]}):
         state, x = tracker.advance(before, depth)
-    finally:
-        tracker.settings = settings
     if x is None:
         return False
     held[-1] = (index, x)

@@ -36,6 +36,7 @@ frames from any iterable and yields each frame's pose as soon as it is known;
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -186,6 +187,19 @@ class Tracker:
         """The energy of ``frame`` (uploaded) without the motion prior, on the coarse tiles."""
         return Energy(self.renderers.coarse, frame.weight, self.smoothed, self.recorder,
                       self.settings.energy.pose_prior_std, self.settings.energy.twist_std)
+
+    @contextmanager
+    def settings_overlaid(self, changes: dict):
+        """The tracker with ``changes`` laid over its settings (:meth:`TrackerSettings.updated`)
+        inside the block, its own settings again after it -- for the tracks that run with a
+        recheck or the fresh look off (a re-track's backward track, a revoke, the start
+        check's two tracks)."""
+        settings = self.settings
+        self.settings = settings.updated(changes)
+        try:
+            yield self
+        finally:
+            self.settings = settings
 
     def judge_energy(self) -> Energy:
         """The energy without the motion prior of the frame uploaded last, on the tiles the
