@@ -207,3 +207,44 @@ def test_a_look_its_rule_takes_back_leaves_the_track_as_it_was(squat, monkeypatc
                            for r in revoked)
     joints = np.asarray(body.joint_positions(np.array(poses)))
     assert point_errors(joints[:1], squat.joints[:1]).mean() > 0.2
+
+
+def test_a_look_sets_no_floor_for_a_later_re_track(squat, monkeypatch):
+    """retrack.was_look: the frames a fresh look's re-track went back over stay open to a
+    later correction's re-track (a look is one frame's energy; dev wide cartwheel seed 2:
+    the proposals' recovery on 21 stopped at the floor a look on 16 had set), while any
+    other correction's re-track closes them. The look is real (the start a quarter turn
+    off, taken on frame 2); the later correction is a recovery injected on frame 4 (a loss
+    found again at once). Its re-track may reach frame 0 after the look; with the look read
+    as a loss (``was_look`` patched to say no), only frame 3."""
+    from depthtrack.track import loop
+
+    floors = []
+    real_retrack, real_advance = loop.retrack_before_correction, loop._advance_into
+
+    def recording(tracker, held, recent, first, at, kind="heading"):
+        floors.append((at, kind, first))
+        return real_retrack(tracker, held, recent, first, at, kind)
+
+    def found_again_on_4(tracker, held, i, depth):
+        real_advance(tracker, held, i, depth)
+        if i == 4:
+            s = tracker.state
+            tracker.state = s.replace(recoveries=s.recoveries + (
+                {"frame": 4, "index": 4, "reason": "injected", "frames_to_recover": 0},))
+    monkeypatch.setattr(loop, "retrack_before_correction", recording)
+    monkeypatch.setattr(loop, "_advance_into", found_again_on_4)
+    body, x0, settings = _a_start_a_quarter_turn_off(squat)
+    settings = settings.updated({"judge": {"look_every": 2, "look_revoke": "never"}})
+    seen = {}
+    for look_is_look in (True, False):
+        floors.clear()
+        if not look_is_look:
+            monkeypatch.setattr(loop, "was_look", lambda state: False)
+        with Tracker(body, squat.camera, settings=settings) as tracker:
+            list(tracker.stream((squat.depth(j) for j in range(5)), init_pose=x0))
+            looks = [r["index"] for r in tracker.describe()["recoveries"] if r["reason"] == "look"]
+        assert looks[:1] == [2]                        # the look itself, taken on frame 2
+        seen[look_is_look] = dict(((at, kind), first) for at, kind, first in floors)
+    assert seen[True][2, "recovery"] == 0 and seen[True][4, "recovery"] == 0
+    assert seen[False][2, "recovery"] == 0 and seen[False][4, "recovery"] == 3
