@@ -37,24 +37,16 @@ def test_a_switch_is_taken_back_by_the_rule_asked_for():
 
 
 
-def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
-    """With retro_revoke "refused", a heading switch to the wrong heading -- the swapped
-    twin, climbed, injected on frame 4 of a track that faces the right way, the judge's
-    recovery off so that only the re-track can answer it -- is re-tracked, the backward
-    track scores worse from its first frame, and the switch is taken back: no frame back to
-    front. Without it frame 4 is back to front (the recheck would turn the track again four
-    frames later; six frames are tracked)."""
+def _switch_to_the_twin_on(frame: int, monkeypatch) -> None:
+    """Make the heading recheck switch to the swapped twin, climbed, on ``frame`` (when it
+    runs there: ``heading.every``), ``by`` ``"injected"``; on other frames it is itself."""
     import depthtrack.track.rechecks as rechecks
-    from depthtrack.body.facing import back_to_front
 
-    body = BodyModel.default(height=1.75)
-    x0 = fit_pose_to_joints(body, squat.joints[0])
-    wrong_on = 4                         # the recheck's first turn (every 4)
     real = rechecks.recheck_heading
 
     def switching_on_one_frame(state, pose, refit, twins, pixels, settings, judge=None,
                                polish=None):
-        if state.frame != wrong_on or not settings.heading.every:
+        if state.frame != frame or not settings.heading.every:
             return real(state, pose, refit, twins, pixels, settings, judge, polish)
         twin, _ = refit(np.asarray(twins(pose)).reshape(-1, len(pose))[0])
         switch = {"frame": state.frame, "energy_kept": 0.0, "energy_turned": 0.0,
@@ -62,6 +54,21 @@ def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkey
         return twin, {"heading_votes": 0, "heading_evidence": 0.0,
                       "heading_switches": state.heading_switches + (switch,)}, True
     monkeypatch.setattr(rechecks, "recheck_heading", switching_on_one_frame)
+
+
+def test_a_switch_whose_backward_track_gives_nothing_is_taken_back(squat, monkeypatch):
+    """With retro_revoke "refused", a heading switch to the wrong heading -- the swapped
+    twin, climbed, injected on frame 4 of a track that faces the right way, the judge's
+    recovery off so that only the re-track can answer it -- is re-tracked, the backward
+    track scores worse from its first frame, and the switch is taken back: no frame back to
+    front. Without it frame 4 is back to front (the recheck would turn the track again four
+    frames later; six frames are tracked)."""
+    from depthtrack.body.facing import back_to_front
+
+    body = BodyModel.default(height=1.75)
+    x0 = fit_pose_to_joints(body, squat.joints[0])
+    wrong_on = 4                         # the recheck's first turn (every 4)
+    _switch_to_the_twin_on(wrong_on, monkeypatch)
     base = TrackerSettings().updated({"search": {"untwist": []},
                                       "heading": {"retro_frames": 10, "every": 4},
                                       "judge": {"lost_ratio": 100.0},
@@ -240,7 +247,7 @@ def test_a_look_sets_no_floor_for_a_later_re_track(squat, monkeypatch):
     for look_is_look in (True, False):
         floors.clear()
         if not look_is_look:
-            monkeypatch.setattr(loop, "was_look", lambda state: False)
+            monkeypatch.setattr(loop, "was_look", lambda state, kind: False)
         with Tracker(body, squat.camera, settings=settings) as tracker:
             list(tracker.stream((squat.depth(j) for j in range(5)), init_pose=x0))
             looks = [r["index"] for r in tracker.describe()["recoveries"] if r["reason"] == "look"]
@@ -248,3 +255,28 @@ def test_a_look_sets_no_floor_for_a_later_re_track(squat, monkeypatch):
         seen[look_is_look] = dict(((at, kind), first) for at, kind, first in floors)
     assert seen[True][2, "recovery"] == 0 and seen[True][4, "recovery"] == 0
     assert seen[False][2, "recovery"] == 0 and seen[False][4, "recovery"] == 3
+
+
+def test_a_switch_taken_back_after_a_look_is_the_switch(squat, monkeypatch):
+    """revoke_switch takes back the correction it was asked to: a heading switch injected on
+    frame 4, after a fresh look on frame 2 (the start a quarter turn off), that its re-track
+    takes back ("refused") is the switch -- gone from the heading switches, its entry's
+    ``switch`` -- and the look stands. (Read from the newest recovery alone, the look was
+    taken back instead and the switch left standing: dev 01_08 from 90 degrees seed 3.) The
+    rules patched: "refused" takes back every correction, "never" none (the rules
+    themselves are tested in closed form above)."""
+    from depthtrack.track import retrack
+
+    monkeypatch.setattr(retrack, "revokes", lambda rule, *args, **kwargs: rule == "refused")
+    body, x0, settings = _a_start_a_quarter_turn_off(squat)
+    settings = settings.updated({"heading": {"every": 4, "retro_revoke": "refused"},
+                                 "judge": {"look_revoke": "never"}})
+    _switch_to_the_twin_on(4, monkeypatch)
+    with Tracker(body, squat.camera, settings=settings) as tracker:
+        list(tracker.stream((squat.depth(j) for j in range(6)), init_pose=x0))
+        info = tracker.describe()
+    assert [r["index"] for r in info["recoveries"] if r["reason"] == "look"][:1] == [2]
+    revoked = [r for r in info["retracks"] if r.get("revoked")]
+    assert [(r["kind"], r["index"]) for r in revoked] == [("heading", 4)]
+    assert revoked[0]["switch"]["by"] == "injected" and "recovery" not in revoked[0]
+    assert all(sw["index"] != 4 for sw in info["heading_switches"])

@@ -72,9 +72,9 @@ def stream_poses(tracker, frames, init_pose=None):
             _advance_into(tracker, held, i, depth)
             kind = new_correction(before, tracker.state, s.heading.retro_after) if retro else None
             if kind is not None and tracker.state.pose is not None:
-                look = kind == "recovery" and was_look(tracker.state)
+                look = was_look(tracker.state, kind)
                 revoked = (retrack_before_correction(tracker, held, recent, lowest[kind], i, kind)
-                           and revoke_switch(tracker, held, before, depth, i))
+                           and revoke_switch(tracker, held, before, depth, i, kind))
                 # a look's re-track sets no floor: a later correction's re-track, on its own
                 # evidence, may go back past it (JudgeSettings.look_every)
                 if not revoked and not look:

@@ -148,8 +148,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              better if h.retro_take == "prefix" else 0)
         rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
-                settings.judge.look_revoke if kind == "recovery" and was_look(corrected)
-                else "never")
+                settings.judge.look_revoke if was_look(corrected, kind) else "never")
         revoke = revokes(rule, n, better, len(indices), outscored=e_back > e_forward,
                          met=stopped == STOP_LABELS["heading"])
         n = 0 if revoke else n
@@ -165,13 +164,16 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     return revoke
 
 
-def was_look(state) -> bool:
-    """Whether ``state``'s newest recovery is a fresh look (reason ``"look"``). A look's
+def was_look(state, kind: str = "recovery") -> bool:
+    """Whether the correction of ``kind`` (:data:`CORRECTION_ORDER`) that ``state`` has
+    just had is a fresh look: a recovery whose entry, the newest, has reason ``"look"``
+    (after a heading switch or a limb swap, False whatever the recoveries before). A look's
     re-track sets no floor for later re-tracks (:func:`reach_after` is not called for it):
     a look is one frame's energy, and a later correction on its own evidence may go back past
     it (dev wide cartwheel seed 2: the proposals' recovery on frame 21 re-tracked only to frame
     17, past a look on 16 that had kept the star upside down, 89.4 -> 72.8 %)."""
-    return bool(state.recoveries) and state.recoveries[-1].get("reason") == "look"
+    return (kind == "recovery" and bool(state.recoveries)
+            and state.recoveries[-1].get("reason") == "look")
 
 
 def revoke_rule(heading, switch: dict) -> str:
@@ -252,8 +254,9 @@ def gave_up(judged, margin: float, frames: int) -> bool:
     return bool(d[-1] > 0 and len(d) - 1 - int(np.argmin(d)) >= frames)
 
 
-def revoke_switch(tracker, held, before, depth, index: int) -> bool:
-    """Take back the heading switch or fresh look on frame ``index`` whose re-track
+def revoke_switch(tracker, held, before, depth, index: int, kind: str = "heading") -> bool:
+    """Take back the heading switch or fresh look (``kind`` ``"heading"`` or ``"recovery"``,
+    the correction re-tracked) on frame ``index`` whose re-track
     :func:`revokes` it (:attr:`HeadingSettings.retro_revoke`, :attr:`JudgeSettings.look_revoke`):
     frame ``index`` tracked again from ``before`` (the state before it) -- after a switch
     with the heading recheck off and the recheck's votes and evidence cleared, so the twin
@@ -273,7 +276,7 @@ def revoke_switch(tracker, held, before, depth, index: int) -> bool:
     standing (and no backward frame taken), when the track without it is dropped on that
     frame.
     """
-    look = was_look(tracker.state)
+    look = was_look(tracker.state, kind)
     corrected = (tracker.state.recoveries[-1] if look else tracker.state.heading_switches[-1])
     entry = {**tracker.state.retracks[-1], "revoked": True,
              ("recovery" if look else "switch"): {k: v for k, v in corrected.items()
