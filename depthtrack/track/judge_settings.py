@@ -45,8 +45,8 @@ class JudgeSettings:
     that settled a quarter turn off explains the image nearly as well as it can from there,
     so its unexplained share never jumps (dev probe: 105_05 from 90 degrees seed 1, 53.5 ->
     91.3 %; about a fifth more time a frame at 8; README, "A fresh look"). 8 by default
-    since 2026-11-29 (dev, 72 tracks paired: +0.97 +- 0.60 points, none lost more than 1.6,
-    the 27 off-front +2.2, from 90 degrees 80.5 -> 86.8 %; ``--preset fast`` keeps it off).
+    since 2026-11-29 (dev, 72 tracks paired: +1.0 points, none lost more than 1.6, from 90
+    degrees 80.5 -> 87.2 %; test 91.1 -> 91.7 %; ``--preset fast`` keeps it off).
     ``look_turn``:
     the most degrees the look's pose may be turned from the track's (the larger of the angles
     between their root forward directions and between their long axes) and be taken: a half
