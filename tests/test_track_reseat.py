@@ -8,8 +8,8 @@ from depthtrack.contract import JOINT_INDEX
 from depthtrack.io import open_sequence
 from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
-from depthtrack.track.reseat import (LIMB_SLOTS, MIRROR, limb_library, recheck_reseat,
-                                     reseat_candidates, reseat_limbs)
+from depthtrack.track.reseat import (LIMB_SLOTS, MIRROR, free_space_limbs, limb_library,
+                                     recheck_reseat, reseat_candidates, reseat_limbs)
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
@@ -82,7 +82,7 @@ def test_the_recheck_takes_a_reseated_limb_only_on_a_clear_lead_and_when_due():
     # not due on an odd frame; never with reseat_every 0
     odd = TrackingState(log=({},) * 5)
     assert recheck_reseat(odd, pose, refit, energy, climb_limb, lib, s)[2] is False
-    off = TrackerSettings()
+    off = TrackerSettings(heading={"reseat_free": 0.0})
     assert off.heading.reseat_every == 0
     assert recheck_reseat(state, pose, refit, energy, climb_limb, lib, off)[2] is False
     # a lead under the margin keeps the pose (the target 1.9 away: 1.9 % of ~101.9)
@@ -90,6 +90,68 @@ def test_the_recheck_takes_a_reseated_limb_only_on_a_clear_lead_and_when_due():
     assert recheck_reseat(state, pose, refit, energy, climb_limb, lib, strict)[2] is False
     with pytest.raises(ValueError, match="reseat_climbs"):
         TrackerSettings(heading={"reseat_climbs": 0})
+
+
+def test_a_limb_the_camera_sees_through_is_over_free_space():
+    """free_space_limbs: a forearm drawn where the camera reads the wall 2 m behind it is
+    listed with its share; one drawn on the trunk (readings 5 cm behind) is not; pixels
+    without a reading count neither way; too few pixels are not enough."""
+    from depthtrack.body.skeleton import JOINTS
+
+    names = list(JOINTS)
+    labels = np.full((20, 30), -1)
+    model = np.zeros((20, 30))
+    depth = np.full((20, 30), 4.0)                  # the wall
+    labels[2:6, 2:12] = names.index("l_elbow")      # 40 pixels of the left forearm
+    model[2:6, 2:12] = 2.0
+    depth[2:6, 2:5] = 2.05                          # 12 of them over the trunk
+    depth[5, 5:12] = 0.0                            # 7 without a reading
+    labels[10:14, 2:12] = names.index("r_wrist")    # the right hand, on the trunk
+    model[10:14, 2:12] = 2.0
+    depth[10:14, 2:12] = 2.05
+    out = dict(free_space_limbs(model, labels, depth, names, share=0.5, min_pixels=5))
+    assert set(out) == {"l_arm"}
+    assert out["l_arm"] == pytest.approx(21 / 33)   # 21 through, 33 with a reading
+    assert free_space_limbs(model, labels, depth, names, share=0.7, min_pixels=5) == []
+    assert free_space_limbs(model, labels, depth, names, share=0.5, min_pixels=22) == []
+    # a gap larger than the wall's distance behind: nothing seen through
+    assert free_space_limbs(model, labels, depth, names, share=0.5, gap=2.5) == []
+
+
+def test_a_limb_over_free_space_is_reseated_alone_on_any_frame():
+    """The recheck with ``reseat_free``: on a frame the periodic re-seat is not due, a limb
+    the frame lists as over free space is re-seated (only it: the left arm, which would gain
+    more, is not tried) and its entry says why; without the setting, or with nothing
+    listed, nothing happens."""
+    lib = {"arm": np.array([[0.0] * 6, [-1.4, 0.0, 0.0, -0.5, 0.0, 0.0]]),
+           "leg": np.array([[0.0] * 6])}
+    target = lib["arm"][1] * MIRROR
+
+    def energy(poses):
+        p = np.atleast_2d(poses)
+        return (100.0 + np.abs(p[:, LIMB_SLOTS["r_arm"]] - target).sum(axis=1)
+                + 5.0 * np.abs(p[:, LIMB_SLOTS["l_arm"]] - lib["arm"][1]).sum(axis=1))
+
+    refit = lambda pose: (pose, float(energy(pose)[0]))                  # noqa: E731
+    climb_limb = lambda pose, limb: (pose, float(energy(pose)[0]))       # noqa: E731
+    state = TrackingState(log=({},) * 6)                # frame 6: looked for every 2nd frame
+    pose = np.zeros(48)
+    s = TrackerSettings(heading={"reseat_free": 0.5, "reseat_free_every": 2})
+    assert s.heading.reseat_every == 0
+    free = lambda x: [("r_arm", 0.8)]                                     # noqa: E731
+    y, changes, switched = recheck_reseat(state, pose, refit, energy, climb_limb, lib, s,
+                                          free_limbs=free)
+    assert switched and np.allclose(y[LIMB_SLOTS["r_arm"]], target)
+    assert np.array_equal(y[LIMB_SLOTS["l_arm"]], pose[LIMB_SLOTS["l_arm"]])
+    event = changes["reseats"][0]
+    assert event["limb"] == "r_arm" and event["frame"] == 6
+    assert event["trigger"] == "free" and event["free_share"] == {"r_arm": 0.8}
+    assert not recheck_reseat(state, pose, refit, energy, climb_limb, lib, s,
+                              free_limbs=lambda x: [])[2]
+    assert not recheck_reseat(state, pose, refit, energy, climb_limb, lib,
+                              TrackerSettings(heading={"reseat_free": 0.0}), free_limbs=free)[2]
+    odd = TrackingState(log=({},) * 7)                                    # not looked for
+    assert not recheck_reseat(odd, pose, refit, energy, climb_limb, lib, s, free_limbs=free)[2]
 
 
 def test_the_start_reseats_limbs_in_turn_while_each_gains_by_the_margin():
@@ -152,3 +214,31 @@ def test_an_arm_held_behind_the_back_is_reseated_while_tracking(squat):
     assert err[1:].max() < 0.08                          # frames 2-5
     stuck, none = arm_errors(TrackerSettings(heading=common))
     assert not none and stuck[1] > 0.5
+
+
+def test_an_arm_out_past_the_body_is_reseated_on_the_next_frame(squat):
+    """The right arm starts swung across the trunk and out past its far side, where the
+    camera sees the room behind the forearm, while it hangs at the side. With
+    ``reseat_free`` the re-seat puts it back on frame 1 (no periodic re-seat); without it
+    the arm is still far off there."""
+    body = BodyModel.default(height=1.75)
+    truth = squat.joints
+    x0 = fit_pose_to_joints(body, truth[0])
+    x0[LIMB_SLOTS["r_arm"]] = [0.0, 0.0, -1.3, 0.0, 0.0, 0.0]         # across and out
+    depths = [squat.depth(i) for i in range(3)]
+
+    def first_frame(settings):
+        with Tracker(body, squat.camera, method="hc", settings=settings) as tracker:
+            state, _, _ = tracker.start(TrackingState(), depths[0], pose=x0)
+            state, x = tracker.advance(state, depths[1])
+        err = np.linalg.norm(body.joint_positions(x)[R_ARM] - truth[1, R_ARM], axis=-1).mean()
+        return err, state.reseats
+
+    common = {"every": 0, "limb_every": 0}
+    err, reseats = first_frame(TrackerSettings(heading={**common, "reseat_free": 0.5,
+                                                        "reseat_free_every": 1}))
+    assert reseats and reseats[0]["limb"] == "r_arm" and reseats[0]["frame"] == 1
+    assert reseats[0]["trigger"] == "free" and reseats[0]["free_share"]["r_arm"] >= 0.5
+    assert err < 0.1
+    stuck, none = first_frame(TrackerSettings(heading={**common, "reseat_free": 0.0}))
+    assert not none and stuck > 0.3

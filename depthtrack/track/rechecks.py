@@ -19,7 +19,7 @@ from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, r
 from .proposals import frame_proposals
 from .reach import (blob_reach_candidates, hidden_limbs, reach_candidates, recheck_reach,
                     unexplained_blobs)
-from .reseat import limb_climber, limb_library, recheck_reseat
+from .reseat import free_space_limbs, limb_climber, limb_library, recheck_reseat
 from .search import climb
 from .start import global_search, start_up, wrong_side
 
@@ -70,11 +70,12 @@ def recheck_stage(tracker, state, energy, frame, x):
                 state, x, refit, bare, lambda pose: reach_all(tracker, frame, pose), s, floor)
         if reached:
             return y, {**changes, **more}, "reach"
-    if s.heading.reseat_every:
+    if s.heading.reseat_every or s.heading.reseat_free:
         climb_limb = limb_climber(bare, tracker.climbers.start, recorder, s.heading.refit_level)
         with recorder.timed("reseat"):
-            y, more, reseated = recheck_reseat(state, x, refit, bare, climb_limb, limb_library(),
-                                               s, clip=tracker.body.clip, floor=floor)
+            y, more, reseated = recheck_reseat(
+                state, x, refit, bare, climb_limb, limb_library(), s, clip=tracker.body.clip,
+                floor=floor, free_limbs=lambda pose: over_free_space(tracker, frame, pose))
         if reseated:
             return y, {**changes, **more}, "reseat"
     if not due(state, s.heading.search_every):
@@ -86,6 +87,15 @@ def recheck_stage(tracker, state, energy, frame, x):
     if taken is None:
         return x, changes, None
     return taken, {**changes, **more}, "search"
+
+
+def over_free_space(tracker, frame, pose):
+    """:func:`.reseat.free_space_limbs` of ``pose (48,)`` on ``frame`` (two full-image renders),
+    by :attr:`HeadingSettings.reseat_free`, ``reseat_free_pixels`` and ``reseat_free_gap``."""
+    h = tracker.settings.heading
+    r = tracker.renderers
+    return free_space_limbs(r.depth(pose), r.labels(pose), frame.depth, r.body.joint_names,
+                            h.reseat_free, h.reseat_free_pixels, h.reseat_free_gap)
 
 
 def close_call_polish(tracker):

@@ -22,6 +22,12 @@ re-seated limb competes with the pose it would replace on equal terms: set on th
 as tracked, the limb's climb alone could not make up for the rest of the body's, and the
 re-seated poses trailed by 1 to 14 % where they were right.
 
+A limb over free space (:attr:`HeadingSettings.reseat_free`, :func:`free_space_limbs`) is
+re-seated where it is seen (looked for every ``reseat_free_every`` frames, those the other
+rechecks climb the tracked pose on), whatever ``reseat_every`` says: where most of the camera
+pixels a forearm and hand (or shin and foot) cover read well behind them, the camera sees
+through the limb, so it is not there. Only those limbs are tried.
+
 The automatic start can do the same once (:func:`reseat_limbs`,
 :attr:`StartSettings.reseat_rounds`): the global search tries six arm poses, and a start
 can keep an arm in a basin none of them leads out of (dev: 01_08 on SR4000 from 270
@@ -66,15 +72,61 @@ def limb_library(path=None) -> dict:
                 "leg": np.array(data["leg"], dtype=np.float64)}
 
 
-def reseat_candidates(pose, library, clip=None):
-    """Every limb of ``pose (48,)`` set to every library pose.
+def free_space_limbs(model_depth, labels, depth, joint_names, share: float, min_pixels: int = 5,
+                     gap: float = 0.25) -> list:
+    """The limbs a pose holds where the camera sees through them.
+
+    A limb's lower segment (forearm and hand, shin and foot: the labels of its middle and
+    end joint, :data:`.reach.LIMBS`) is over free space at a pixel with a reading more than
+    ``gap`` metres behind the pose's surface there. Listed: the limbs with at least
+    ``min_pixels`` such pixels making up at least the fraction ``share`` of the segment's
+    pixels with a reading.
+
+    Parameters
+    ----------
+    model_depth : (H, W) float
+        The pose's rendered depth, 0 where it is not drawn.
+    labels : (H, W) int
+        The pose's part labels (index into ``joint_names``, -1 none).
+    depth : (H, W) float
+        The observed depth (m), 0 = no reading.
+    joint_names : sequence of str
+    share : float
+    min_pixels : int
+    gap : float
+
+    Returns
+    -------
+    list of (limb, free share) in :data:`.reach.LIMBS` order
+    """
+    model_depth = np.asarray(model_depth, dtype=np.float64)
+    depth = np.asarray(depth, dtype=np.float64)
+    labels = np.asarray(labels)
+    index = {n: i for i, n in enumerate(joint_names)}
+    reading = (depth > 0) & (model_depth > 0)
+    through = reading & (depth > model_depth + gap)
+    out = []
+    for limb, (_, mid, end) in LIMBS.items():
+        segment = (labels == index[mid]) | (labels == index[end])
+        n_read = np.count_nonzero(segment & reading)
+        n_free = np.count_nonzero(segment & through)
+        if n_free >= min_pixels and n_read and n_free >= share * n_read:
+            out.append((limb, n_free / n_read))
+    return out
+
+
+def reseat_candidates(pose, library, clip=None, limbs=None):
+    """Every limb of ``pose (48,)`` (or of ``limbs``, names of :data:`LIMB_SLOTS`) set to
+    every library pose.
 
     Returns ``(limbs, poses)``: ``limbs`` the limb name of each candidate, ``poses (N, 48)``
-    (``N = 2 * (K_arm + K_leg)``), clipped by ``clip`` (``poses -> poses``) when given.
+    (``N = 2 * (K_arm + K_leg)`` for all four), clipped by ``clip`` (``poses -> poses``) when given.
     """
     pose = np.asarray(pose, dtype=np.float64)
+    names = list(LIMB_SLOTS) if limbs is None else [n for n in LIMB_SLOTS if n in set(limbs)]
     limbs, out = [], []
-    for name, slots in LIMB_SLOTS.items():
+    for name in names:
+        slots = LIMB_SLOTS[name]
         side, kind = name.split("_")
         values = library[kind] * (MIRROR if side == "r" else 1.0)
         batch = np.repeat(pose[None], len(values), axis=0)
@@ -94,19 +146,19 @@ def limb_climber(energy, climber, recorder, level_offset: int = 0):
     return run
 
 
-def best_reseat(pose, energy, climb_limb, library, climbs: int = 1, clip=None):
-    """The best re-seat of ``pose (48,)``: every limb set to every library pose, scored by
-    ``energy`` (``(N, 48) -> (N,)``, one batch), the ``climbs`` lowest of each limb climbed
-    by ``climb_limb`` (``(pose, limb) -> (pose, energy)``).
+def best_reseat(pose, energy, climb_limb, library, climbs: int = 1, clip=None, limbs=None):
+    """The best re-seat of ``pose (48,)``: every limb (or those named in ``limbs``) set to
+    every library pose, scored by ``energy`` (``(N, 48) -> (N,)``, one batch), the ``climbs``
+    lowest of each limb climbed by ``climb_limb`` (``(pose, limb) -> (pose, energy)``).
 
     Returns ``(limb, pose (48,), energy)`` of the lowest climbed.
     """
-    limbs, candidates = reseat_candidates(pose, library, clip)
+    names, candidates = reseat_candidates(pose, library, clip, limbs)
     scores = np.asarray(energy(candidates), dtype=np.float64)
-    limbs = np.array(limbs)
+    names = np.array(names)
     best = None
     for name in LIMB_SLOTS:
-        own = np.flatnonzero(limbs == name)
+        own = np.flatnonzero(names == name)
         for i in own[np.argsort(scores[own], kind="stable")[:climbs]]:
             y, e_y = climb_limb(candidates[i], name)
             if best is None or float(e_y) < best[2]:
@@ -115,11 +167,13 @@ def best_reseat(pose, energy, climb_limb, library, climbs: int = 1, clip=None):
 
 
 def reseat_limbs(pose, e_pose: float, energy, climb_limb, library, rounds: int, margin: float,
-                 climbs: int = 1, clip=None, floor: float = 0.0):
+                 climbs: int = 1, clip=None, floor: float = 0.0, limbs=None):
     """Up to ``rounds`` re-seats of ``pose (48,)`` in turn: each round the best re-seat
     (:func:`best_reseat`) replaces the pose when its energy is lower than ``e_pose``'s by
     the fraction ``margin`` of the energy above ``floor`` (:func:`~.energy.relative_lead`);
     the first round that is not stops.
+
+    ``limbs``: only those limbs (names of :data:`LIMB_SLOTS`); None = all four.
 
     Returns ``(pose (48,), energy, events)``: ``events`` a list of ``{"limb",
     "energy_kept", "energy_reseated"}``, one per re-seat taken.
@@ -127,7 +181,7 @@ def reseat_limbs(pose, e_pose: float, energy, climb_limb, library, rounds: int, 
     x, e = np.asarray(pose, dtype=np.float64), float(e_pose)
     events = []
     for _ in range(int(rounds)):
-        name, y, e_y = best_reseat(x, energy, climb_limb, library, climbs, clip)
+        name, y, e_y = best_reseat(x, energy, climb_limb, library, climbs, clip, limbs)
         if relative_lead(e, e_y, floor) <= margin:
             break
         events.append({"limb": name, "energy_kept": round(e, 1), "energy_reseated": round(e_y, 1)})
@@ -136,7 +190,7 @@ def reseat_limbs(pose, e_pose: float, energy, climb_limb, library, rounds: int, 
 
 
 def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, clip=None,
-                   floor: float = 0.0):
+                   floor: float = 0.0, free_limbs=None):
     """The re-seat recheck of one frame: keep ``pose`` or one with a limb re-seated.
 
     Parameters
@@ -157,6 +211,10 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     floor : float
         The energy every pose pays (:attr:`~.heading_settings.HeadingSettings.margins_over`);
         the margin is a fraction of the kept energy above it.
+    free_limbs : callable ``(pose (48,)) -> list of (limb, share)`` or None
+        :func:`free_space_limbs` of the frame; with :attr:`HeadingSettings.reseat_free` the
+        limbs it lists are re-seated every ``reseat_free_every`` frames (only those, unless
+        the periodic re-seat is due). Their entries say ``"trigger": "free"`` and the limb's ``"free_share"``.
 
     Returns
     -------
@@ -167,11 +225,17 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     switched : bool
     """
     h = settings.heading
+    limbs, trigger = None, {}
     if not due(state, h.reseat_every):
-        return pose, {}, False
+        free = (free_limbs(pose) if free_limbs is not None and h.reseat_free > 0
+                and due(state, h.reseat_free_every) else [])
+        if not free:
+            return pose, {}, False
+        limbs = [name for name, _ in free]
+        trigger = {"trigger": "free", "free_share": {name: round(float(v), 3) for name, v in free}}
     base, e_pose = refit(pose)           # the limbs are re-seated on the climbed pose
     y, _, taken = reseat_limbs(base, e_pose, energy, climb_limb, library, 1, h.reseat_margin,
-                               h.reseat_climbs, clip, floor)
+                               h.reseat_climbs, clip, floor, limbs)
     if not taken:
         return pose, {}, False
-    return y, {"reseats": state.reseats + ({"frame": state.frame, **taken[0]},)}, True
+    return y, {"reseats": state.reseats + ({"frame": state.frame, **taken[0], **trigger},)}, True
