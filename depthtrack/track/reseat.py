@@ -214,7 +214,8 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     free_limbs : callable ``(pose (48,)) -> list of (limb, share)`` or None
         :func:`free_space_limbs` of the frame; with :attr:`HeadingSettings.reseat_free` the
         limbs it lists are re-seated every ``reseat_free_every`` frames (only those, unless
-        the periodic re-seat is due). Their entries say ``"trigger": "free"`` and the limb's ``"free_share"``.
+        the periodic re-seat is due). Their entries say ``"trigger": "free"`` and the
+        limb's ``"free_share"``.
 
     Returns
     -------
