@@ -154,6 +154,44 @@ def test_a_limb_over_free_space_is_reseated_alone_on_any_frame():
     assert not recheck_reseat(odd, pose, refit, energy, climb_limb, lib, s, free_limbs=free)[2]
 
 
+def test_with_reseat_free_climbed_the_climbed_pose_replaces_a_limb_over_free_space():
+    """No library pose leads (the library holds only the tracked arm), but the climbed pose
+    (the refit: the right elbow bent) clears the listed limb: with ``reseat_free_climbed``
+    it replaces the tracked pose and its entry says so; where the climbed pose still holds
+    the limb over free space, or without the setting, the tracked pose stays."""
+    lib = {"arm": np.array([[0.0] * 6]), "leg": np.array([[0.0] * 6])}
+    elbow = LIMB_SLOTS["r_arm"][3]
+
+    def energy(poses):
+        return 100.0 + np.abs(np.atleast_2d(poses)[:, elbow] + 0.8)
+
+    bent = np.zeros(48)
+    bent[elbow] = -0.8
+    refit = lambda pose: (bent, float(energy(bent)[0]))                  # noqa: E731
+    climb_limb = lambda pose, limb: (pose, float(energy(pose)[0]))       # noqa: E731
+    free = lambda x: [("r_arm", 0.9)] if x[elbow] == 0 else []            # noqa: E731
+    state = TrackingState(log=({},) * 4)
+    pose = np.zeros(48)
+    on = TrackerSettings(heading={"reseat_free_every": 2, "reseat_free_climbed": True,
+                                  "reseat_margin": 0.05})
+    y, changes, switched = recheck_reseat(state, pose, refit, energy, climb_limb, lib, on,
+                                          free_limbs=free)
+    assert switched and np.array_equal(y, bent)
+    event = changes["reseats"][0]
+    assert event["climbed"] is True and event["limb"] == "r_arm" and event["trigger"] == "free"
+    assert event["energy_kept"] == pytest.approx(100.8) and event["energy_reseated"] == 100.0
+    # the climbed pose still over free space: kept
+    assert not recheck_reseat(state, pose, refit, energy, climb_limb, lib, on,
+                              free_limbs=lambda x: [("r_arm", 0.9)])[2]
+    # the setting off (the default): the tracked pose stays
+    default = TrackerSettings(heading={"reseat_free_every": 2, "reseat_margin": 0.05})
+    assert default.heading.reseat_free_climbed is False
+    assert not recheck_reseat(state, pose, refit, energy, climb_limb, lib, default,
+                              free_limbs=free)[2]
+    with pytest.raises(ValueError, match="reseat_free_climbed"):
+        TrackerSettings(heading={"reseat_free_climbed": 1})
+
+
 def test_the_start_reseats_limbs_in_turn_while_each_gains_by_the_margin():
     """reseat_limbs (StartSettings.reseat_rounds) on a toy energy: both arms off their
     targets; each round re-seats the limb that gains most, and stops at the first round

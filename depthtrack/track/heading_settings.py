@@ -234,6 +234,13 @@ class HeadingSettings:
     90.4 %, candidates a frame the same; looked for every frame it cost 12 % more; README,
     "A limb over free space"); ``--preset fast`` leaves it out.
 
+    ``reseat_free_climbed``: where a limb over free space is looked at and no library pose
+    wins, the tracked pose climbed without the motion prior (the rechecks' shared climb)
+    replaces it when it no longer holds any of those limbs over free space: the prior held
+    the limb where the camera sees through it, and the image alone pulls it in. Its
+    ``reseats`` entry says ``"climbed": true``. Off by default (README, "A limb over free
+    space").
+
     ``margins_over``: what ``limb_margin``, ``reseat_margin`` and
     :attr:`~.settings.ProposalSettings.reach_margin` are fractions of (:data:`MARGIN_BASES`,
     :func:`.energy.relative_lead`): ``"energy"``, the tracked pose's whole energy;
@@ -377,6 +384,7 @@ class HeadingSettings:
     reseat_free_pixels: int = 5
     reseat_free_gap: float = 0.25
     reseat_free_every: int = 4
+    reseat_free_climbed: bool = False
     retro_frames: int = 50
     retro_margin: float = 0.05
     retro_after: tuple = ("heading", "limbs", "recovery")
@@ -402,6 +410,8 @@ class HeadingSettings:
         _positive(self, "votes", "twin_passes", "reseat_climbs")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)
+        _check(isinstance(self.reseat_free_climbed, bool), "HeadingSettings.reseat_free_climbed "
+               f"must be true or false, not {self.reseat_free_climbed!r}")
         _check(isinstance(self.judge_start, bool), f"HeadingSettings.judge_start must be true "
                                                    f"or false, not {self.judge_start!r}")
         object.__setattr__(self, "twin_starts", tuple(self.twin_starts))

@@ -215,7 +215,9 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
         :func:`free_space_limbs` of the frame; with :attr:`HeadingSettings.reseat_free` the
         limbs it lists are re-seated every ``reseat_free_every`` frames (only those, unless
         the periodic re-seat is due). Their entries say ``"trigger": "free"`` and the
-        limb's ``"free_share"``.
+        limb's ``"free_share"``. With :attr:`HeadingSettings.reseat_free_climbed`, where no
+        library pose wins, the climbed pose (``refit``'s) replaces ``pose`` when it holds
+        none of those limbs over free space (``"climbed": true``, ``"limb"`` the first listed).
 
     Returns
     -------
@@ -237,6 +239,17 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     base, e_pose = refit(pose)           # the limbs are re-seated on the climbed pose
     y, _, taken = reseat_limbs(base, e_pose, energy, climb_limb, library, 1, h.reseat_margin,
                                h.reseat_climbs, clip, floor, limbs)
+    if not taken and trigger and h.reseat_free_climbed and cleared(base, limbs, free_limbs):
+        e_kept = float(np.asarray(energy(np.asarray(pose, dtype=np.float64)[None]))[0])
+        taken = [{"limb": limbs[0], "energy_kept": round(e_kept, 1),
+                  "energy_reseated": round(float(e_pose), 1), "climbed": True}]
+        y = base
     if not taken:
         return pose, {}, False
     return y, {"reseats": state.reseats + ({"frame": state.frame, **taken[0], **trigger},)}, True
+
+
+def cleared(pose, limbs, free_limbs) -> bool:
+    """Whether ``pose (48,)`` holds none of ``limbs`` over free space (``free_limbs``: as
+    for :func:`recheck_reseat`)."""
+    return not {name for name, _ in free_limbs(pose)} & set(limbs)
