@@ -104,6 +104,17 @@ def test_the_report_names_the_rasteriser(report):
     assert report.renderer_label(None) == "GL renderer unknown"      # an older report
 
 
+def test_the_report_names_the_software(report):
+    import numpy
+    from depthtrack.environment import software_versions
+
+    software = software_versions()
+    assert software["numpy"] == numpy.__version__ and software["depthtrack"]
+    line = report.software_label(software)
+    assert line.startswith("Software: python ") and f"numpy {numpy.__version__}" in line
+    assert "None" not in report.software_label({**software, "trimesh": None})
+
+
 def _report_of(figures):
     return {"sequences": [{"name": k, "metrics": {"hc+ep": {"within_10cm": v, "fps": 1.0,
                                                               "wall_fps": 0.5}}}

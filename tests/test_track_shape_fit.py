@@ -83,6 +83,9 @@ def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, t
     assert "trial track's frame-0 pose" in summary["initialisation"]
     assert summary["renderer"] == {"gl_renderer": render.gl_renderer(),  # which rasteriser drew
                                    "gl_version": ctx.info["GL_VERSION"]}
+    # and the numeric libraries it was computed with
+    assert summary["software"]["numpy"] == np.__version__
+    assert summary["software"]["python"].count(".") == 2 and summary["software"]["scipy"]
     assert summary["settings"]["shape"]["frames"] == 5
     assert summary["body_height_m"] == pytest.approx(1.75)      # given: not rescaled
     assert summary["body"]["shape"] == body.shape.to_dict() and not body.shape.is_average

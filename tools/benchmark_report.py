@@ -143,6 +143,12 @@ def renderer_label(renderer) -> str:
         f"GL renderer {renderer['gl_renderer']} ({renderer['gl_version']})"
 
 
+def software_label(software: dict) -> str:
+    """The versions a report's tracks were computed with, one line (figures move between
+    installs: README, "Benchmark")."""
+    return "Software: " + ", ".join(f"{k} {v}" for k, v in software.items() if v) + "."
+
+
 def markdown(report: dict) -> str:
     methods = report["methods"]
     out = [f"# Held-out benchmark: {report['split']} split ({report['preset']} preset)", "",
@@ -150,6 +156,7 @@ def markdown(report: dict) -> str:
            f"commit {report['commit']}; "
            f"{report['seconds']:g} s clips at {report['fps']:g} fps, ToF noise, seeds {report['seeds']}; "
            f"{report['wall_s']:.0f} s wall.", "",
+           *([software_label(report["software"]), ""] if report.get("software") else []),
            "Motions: " + ", ".join(f"`{m['name']}` ({m['kind']}, start {m['start_s']:g} s)"
                                    for m in report["motions"]), "",
            *(["**ABLATION: the tracker was told which way each person faces at the start "

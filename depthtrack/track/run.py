@@ -8,6 +8,7 @@ import numpy as np
 
 from ..body.skeleton import TORSO_CONTRACT_JOINTS
 from ..contract import JOINT_INDEX
+from ..environment import software_versions
 from ..errors import InputError
 from ..render.context import gl_info
 from .height import body_for_sequence, fit_body_shape
@@ -160,5 +161,7 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "body": {**body.to_dict(), "height_source": source, "shape_fit": shape_info},
         # which rasteriser drew: a track can follow its last bits (README, "On a GPU")
         "renderer": gl_info(),
+        # and with which numeric libraries (README, "Benchmark": a fresh install moves tracks)
+        "software": software_versions(),
     }
     return result, body, summary
