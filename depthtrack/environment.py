@@ -1,10 +1,10 @@
 """What a result was computed with, beside the rasteriser (:func:`.render.context.gl_info`).
 
-A track's outcome can follow the last bits of a floating-point result: the same sequence,
-tracked by the same commit on a fresh install with newer numeric libraries, moved by up to
-nine points within 10 cm on some test sequences (README, "Benchmark"). So every
-``summary.json`` names the versions it was computed with (``software``), and two figures
-can be told apart by them.
+A track's outcome can follow the last bits of a floating-point result: the test sequences,
+synthesized and tracked again by the same code on a fresh install (other versions of the
+numeric libraries), came out as before to the digit on some tracks and up to nine points
+within 10 cm apart on others (README, "Benchmark"). So every ``summary.json`` names the
+versions it was computed with (``software``), and two figures can be told apart by them.
 """
 from __future__ import annotations
 
