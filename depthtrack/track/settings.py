@@ -131,7 +131,9 @@ class EnergySettings:
     prior_huber : float
         0 (default): the motion prior's Gaussian penalty. Above 0: Huber's loss at that many
         standard deviations (:class:`~depthtrack.motion.prior.ConstantVelocityPrior`,
-        ``huber``): a change of velocity beyond it costs linearly, not quadratically.
+        ``huber``): a change of velocity beyond it costs linearly, not quadratically. 3 on
+        dev at the default of 2026-11-30: +1.9 points over 42 tracks, but one lost 5.5, so
+        not the default (README, "A kick's accelerations, again").
     likelihood_weight : float
         ``w`` of the energy.
     pose_prior_std : float
