@@ -6,6 +6,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "depthtrack"
 
 #: Layer of each top-level module or package; an import may only go to the same or a lower layer.
 LAYER = {"contract": 0, "errors": 0, "progress": 0, "rotations": 0, "data": 0, "shaders": 0,
+         "environment": 0,
          "camera": 1, "likelihood": 1, "io": 2, "body": 3,
          "render": 4, "detect": 4, "motion": 4, "filters": 4,
          "synth": 5, "track": 5, "swim": 5, "evaluate": 6, "export": 6, "cli": 7,
