@@ -25,6 +25,7 @@ sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.contract import JOINT_INDEX  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
+from depthtrack.track.heading_settings import HeadingSettings  # noqa: E402
 from depthtrack.track.reach import LIMBS  # noqa: E402
 from depthtrack.track.reseat import free_space_limbs  # noqa: E402
 from track_replay import read_track  # noqa: E402
@@ -56,9 +57,12 @@ def main(argv=None) -> int:
                                             "124_01_c2_s2 OUT/dev/tracks/124_01_c2_s2/hc+ep --frames")
     parser.add_argument("pairs", nargs="+", type=pathlib.Path, metavar="SEQ TRACK",
                         help="sequence directories with ground truth, each followed by its track")
-    parser.add_argument("--share", type=float, default=0.5, help="HeadingSettings.reseat_free")
-    parser.add_argument("--pixels", type=int, default=5, help="HeadingSettings.reseat_free_pixels")
-    parser.add_argument("--gap", type=float, default=0.25, help="HeadingSettings.reseat_free_gap (m)")
+    h = HeadingSettings()                # the tracker's defaults, one place
+    parser.add_argument("--share", type=float, default=h.reseat_free, help="HeadingSettings.reseat_free")
+    parser.add_argument("--pixels", type=int, default=h.reseat_free_pixels,
+                        help="HeadingSettings.reseat_free_pixels")
+    parser.add_argument("--gap", type=float, default=h.reseat_free_gap,
+                        help="HeadingSettings.reseat_free_gap (m)")
     parser.add_argument("--far", type=float, default=0.15, help="an end joint this far off (m) is wrong")
     parser.add_argument("--frames", action="store_true", help="print every listed limb-frame")
     args = parser.parse_args(argv)
