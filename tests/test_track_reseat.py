@@ -154,6 +154,51 @@ def test_a_limb_over_free_space_is_reseated_alone_on_any_frame():
     assert not recheck_reseat(odd, pose, refit, energy, climb_limb, lib, s, free_limbs=free)[2]
 
 
+def test_a_limb_tracked_hidden_is_reseated_on_the_free_space_looks_frames():
+    """The recheck with ``reseat_hidden``: a limb the frame lists as hidden is re-seated
+    (only it) on the frames the free-space look runs, its entry says ``"trigger":
+    "hidden"``; a limb over free space and a hidden one are tried together (the entry's
+    trigger "free", both listed); off (the default), or on other frames, nothing happens."""
+    lib = {"arm": np.array([[0.0] * 6, [-1.4, 0.0, 0.0, -0.5, 0.0, 0.0]]),
+           "leg": np.array([[0.0] * 6, [0.9, 0.0, 0.0, 0.8, 0.0, 0.0]])}
+    arm = lib["arm"][1] * MIRROR
+
+    def energy(poses):
+        p = np.atleast_2d(poses)
+        return (100.0 + np.abs(p[:, LIMB_SLOTS["r_arm"]] - arm).sum(axis=1)
+                + 5.0 * np.abs(p[:, LIMB_SLOTS["l_leg"]] - lib["leg"][1]).sum(axis=1))
+
+    refit = lambda pose: (pose, float(energy(pose)[0]))                  # noqa: E731
+    climb_limb = lambda pose, limb: (pose, float(energy(pose)[0]))       # noqa: E731
+    state = TrackingState(log=({},) * 8)
+    pose = np.zeros(48)
+    on = TrackerSettings(heading={"reseat_hidden": 0.01, "reseat_free_every": 4})
+    hidden = lambda x: {"r_arm"}                                         # noqa: E731
+    none_free = lambda x: []                                             # noqa: E731
+    y, changes, switched = recheck_reseat(state, pose, refit, energy, climb_limb, lib, on,
+                                          free_limbs=none_free, hidden_limbs=hidden)
+    assert switched and np.allclose(y[LIMB_SLOTS["r_arm"]], arm)
+    assert np.array_equal(y[LIMB_SLOTS["l_leg"]], pose[LIMB_SLOTS["l_leg"]])  # not tried
+    event = changes["reseats"][0]
+    assert event["trigger"] == "hidden" and event["hidden"] == ["r_arm"]
+    assert event["limb"] == "r_arm" and "free_share" not in event
+    # the leg over free space and the arm hidden: both tried, the leg gains more
+    y, changes, _ = recheck_reseat(state, pose, refit, energy, climb_limb, lib, on,
+                                   free_limbs=lambda x: [("l_leg", 0.7)], hidden_limbs=hidden)
+    event = changes["reseats"][0]
+    assert event["limb"] == "l_leg" and event["trigger"] == "free" and event["hidden"] == ["r_arm"]
+    # off by default; and not on a frame the look does not run
+    default = TrackerSettings(heading={"reseat_free_every": 4})
+    assert default.heading.reseat_hidden == 0.0
+    assert not recheck_reseat(state, pose, refit, energy, climb_limb, lib, default,
+                              free_limbs=none_free, hidden_limbs=hidden)[2]
+    odd = TrackingState(log=({},) * 9)
+    assert not recheck_reseat(odd, pose, refit, energy, climb_limb, lib, on,
+                              free_limbs=none_free, hidden_limbs=hidden)[2]
+    with pytest.raises(ValueError, match="reseat_hidden"):
+        TrackerSettings(heading={"reseat_hidden": -0.1})
+
+
 def test_with_reseat_free_climbed_the_climbed_pose_replaces_a_limb_over_free_space():
     """No library pose leads (the library holds only the tracked arm), but the climbed pose
     (the refit: the right elbow bent) clears the listed limb: with ``reseat_free_climbed``

@@ -241,6 +241,17 @@ class HeadingSettings:
     ``reseats`` entry says ``"climbed": true``. Off by default (README, "A limb over free
     space").
 
+    ``reseat_hidden``: a limb tracked hidden is re-seated too (0 = never): on the frames the
+    free-space look runs (``reseat_free_every``), a limb whose forearm and hand (shin and
+    foot) show on fewer than the fraction ``reseat_hidden`` of the person's pixels in the
+    pose's render (:func:`.reach.hidden_limbs`: behind the body, where it costs nothing,
+    or off the person) is re-seated as above, at ``reseat_margin`` (``reseats`` entry
+    ``"trigger": "hidden"`` and the ``"hidden"`` limbs). A truly hidden limb stays where it
+    is unless a library pose explains the image better by the margin. Named from the dev
+    tracks: a limb tracked hidden behind the body while the real one is in view is the
+    commoner miss, and the free-space look never sees it (README, "A limb tracked hidden").
+    Off by default.
+
     ``margins_over``: what ``limb_margin``, ``reseat_margin`` and
     :attr:`~.settings.ProposalSettings.reach_margin` are fractions of (:data:`MARGIN_BASES`,
     :func:`.energy.relative_lead`): ``"energy"``, the tracked pose's whole energy;
@@ -385,6 +396,7 @@ class HeadingSettings:
     reseat_free_gap: float = 0.25
     reseat_free_every: int = 4
     reseat_free_climbed: bool = False
+    reseat_hidden: float = 0.0
     retro_frames: int = 50
     retro_margin: float = 0.05
     retro_after: tuple = ("heading", "limbs", "recovery")
@@ -405,7 +417,7 @@ class HeadingSettings:
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
                   "reseat_margin", "reseat_free", "reseat_free_pixels", "reseat_free_gap",
-                  "reseat_free_every", "retro_frames", "retro_margin", "retro_give_up",
+                  "reseat_free_every", "reseat_hidden", "retro_frames", "retro_margin", "retro_give_up",
                   "polish_within", allow_zero=True)
         _positive(self, "votes", "twin_passes", "reseat_climbs")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)

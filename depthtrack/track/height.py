@@ -21,7 +21,7 @@ from .settings import TrackerSettings
 #: The settings groups that turn every recheck off while tracking (the shape fit's trial
 #: without :attr:`ShapeSettings.trial_rechecks`); the start's front/back check stays.
 NO_RECHECKS = {"heading": {"every": 0, "limb_every": 0, "search_every": 0, "reseat_every": 0,
-                           "reseat_free": 0.0},
+                           "reseat_free": 0.0, "reseat_hidden": 0.0},
                "propose": {"reach_every": 0}}
 
 
@@ -200,9 +200,10 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     # the trial yields its frames as it goes: no pose held back for a re-track after a switch
     # nor a final polish: the fit refines the trial's poses itself; nor a reach into
     # unexplained blobs, which the template's misfit makes of every limb
-    # nor a re-seat of a limb over free space: the trial, whose start the track takes over,
-    # stays as it was measured (README, "A limb over free space")
-    settings = settings.updated({"heading": {"retro_frames": 0, "reseat_free": 0.0},
+    # nor a re-seat of a limb over free space or tracked hidden: the trial, whose start the
+    # track takes over, stays as it was measured (README, "A limb over free space")
+    settings = settings.updated({"heading": {"retro_frames": 0, "reseat_free": 0.0,
+                                             "reseat_hidden": 0.0},
                                  "polish": {"final_tile": 0},
                                  "propose": {"reach_unexplained": 0.0}})
     if segmenter is None:

@@ -70,12 +70,13 @@ def recheck_stage(tracker, state, energy, frame, x):
                 state, x, refit, bare, lambda pose: reach_all(tracker, frame, pose), s, floor)
         if reached:
             return y, {**changes, **more}, "reach"
-    if s.heading.reseat_every or s.heading.reseat_free:
+    if s.heading.reseat_every or s.heading.reseat_free or s.heading.reseat_hidden:
         climb_limb = limb_climber(bare, tracker.climbers.start, recorder, s.heading.refit_level)
         with recorder.timed("reseat"):
             y, more, reseated = recheck_reseat(
                 state, x, refit, bare, climb_limb, limb_library(), s, clip=tracker.body.clip,
-                floor=floor, free_limbs=lambda pose: over_free_space(tracker, frame, pose))
+                floor=floor, free_limbs=lambda pose: over_free_space(tracker, frame, pose),
+                hidden_limbs=lambda pose: tracked_hidden(tracker, frame, pose))
         if reseated:
             return y, {**changes, **more}, "reseat"
     if not due(state, s.heading.search_every):
@@ -96,6 +97,16 @@ def over_free_space(tracker, frame, pose):
     r = tracker.renderers
     return free_space_limbs(r.depth(pose), r.labels(pose), frame.depth, r.body.joint_names,
                             h.reseat_free, h.reseat_free_pixels, h.reseat_free_gap)
+
+
+def tracked_hidden(tracker, frame, pose):
+    """:func:`.reach.hidden_limbs` of ``pose (48,)`` on ``frame`` (one full-image render): the
+    limbs whose lower segment shows on fewer than :attr:`HeadingSettings.reseat_hidden` of
+    the person's pixels."""
+    mask = frame.foreground.mask
+    least = int(np.ceil(tracker.settings.heading.reseat_hidden * np.count_nonzero(mask)))
+    return hidden_limbs(tracker.renderers.labels(pose), mask, tracker.renderers.body.joint_names,
+                        least)
 
 
 def close_call_polish(tracker):

@@ -26,7 +26,11 @@ A limb over free space (:attr:`HeadingSettings.reseat_free`, :func:`free_space_l
 re-seated where it is seen (looked for every ``reseat_free_every`` frames, those the other
 rechecks climb the tracked pose on), whatever ``reseat_every`` says: where most of the camera
 pixels a forearm and hand (or shin and foot) cover read well behind them, the camera sees
-through the limb, so it is not there. Only those limbs are tried.
+through the limb, so it is not there. Only those limbs are tried. A limb tracked hidden
+(:attr:`HeadingSettings.reseat_hidden`, :func:`.reach.hidden_limbs`: its lower segment shows
+on almost none of the person's pixels, behind the body where it costs nothing) is looked for
+on the same frames and re-seated alike; a limb truly hidden stays, unless a library pose
+explains the image better by the margin.
 
 The automatic start can do the same once (:func:`reseat_limbs`,
 :attr:`StartSettings.reseat_rounds`): the global search tries six arm poses, and a start
@@ -190,7 +194,7 @@ def reseat_limbs(pose, e_pose: float, energy, climb_limb, library, rounds: int, 
 
 
 def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, clip=None,
-                   floor: float = 0.0, free_limbs=None):
+                   floor: float = 0.0, free_limbs=None, hidden_limbs=None):
     """The re-seat recheck of one frame: keep ``pose`` or one with a limb re-seated.
 
     Parameters
@@ -218,6 +222,11 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
         limb's ``"free_share"``. With :attr:`HeadingSettings.reseat_free_climbed`, where no
         library pose wins, the climbed pose (``refit``'s) replaces ``pose`` when it holds
         none of those limbs over free space (``"climbed": true``, ``"limb"`` the first listed).
+    hidden_limbs : callable ``(pose (48,)) -> set of limb names`` or None
+        :func:`.reach.hidden_limbs` of the frame; with :attr:`HeadingSettings.reseat_hidden`
+        the limbs it lists are re-seated on the same frames as those over free space (their
+        entries say ``"hidden"``: the hidden limbs; ``"trigger": "hidden"`` where none is
+        over free space).
 
     Returns
     -------
@@ -228,20 +237,28 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     switched : bool
     """
     h = settings.heading
-    limbs, trigger = None, {}
+    limbs, trigger, free_names = None, {}, []
     if not due(state, h.reseat_every):
-        free = (free_limbs(pose) if free_limbs is not None and h.reseat_free > 0
-                and due(state, h.reseat_free_every) else [])
-        if not free:
+        looking = due(state, h.reseat_free_every)
+        free = free_limbs(pose) if free_limbs is not None and h.reseat_free > 0 and looking else []
+        hidden = (hidden_limbs(pose) if hidden_limbs is not None and h.reseat_hidden > 0
+                  and looking else set())
+        free_names = [name for name, _ in free]
+        hidden = [name for name in LIMB_SLOTS if name in hidden and name not in free_names]
+        if not free and not hidden:
             return pose, {}, False
-        limbs = [name for name, _ in free]
-        trigger = {"trigger": "free", "free_share": {name: round(float(v), 3) for name, v in free}}
+        limbs = free_names + hidden
+        trigger = {"trigger": "free" if free else "hidden"}
+        if free:
+            trigger["free_share"] = {name: round(float(v), 3) for name, v in free}
+        if hidden:
+            trigger["hidden"] = hidden
     base, e_pose = refit(pose)           # the limbs are re-seated on the climbed pose
     y, _, taken = reseat_limbs(base, e_pose, energy, climb_limb, library, 1, h.reseat_margin,
                                h.reseat_climbs, clip, floor, limbs)
-    if not taken and trigger and h.reseat_free_climbed and cleared(base, limbs, free_limbs):
+    if not taken and free_names and h.reseat_free_climbed and cleared(base, free_names, free_limbs):
         e_kept = float(np.asarray(energy(np.asarray(pose, dtype=np.float64)[None]))[0])
-        taken = [{"limb": limbs[0], "energy_kept": round(e_kept, 1),
+        taken = [{"limb": free_names[0], "energy_kept": round(e_kept, 1),
                   "energy_reseated": round(float(e_pose), 1), "climbed": True}]
         y = base
     if not taken:
