@@ -8,8 +8,12 @@ how often a listed limb's end joint (wrist, ankle) is more than ``--far`` from t
 (the trigger's precision), how many of the limb-frames that far off it lists (its
 recall), and with ``--frames`` each listed limb-frame. Nothing is tracked; how the
 free-space re-seat (``heading.reseat_free``) was named (README, "A limb over free space").
+With ``--hidden SHARE`` the limbs listed are those tracked hidden instead
+(``depthtrack.track.reach.hidden_limbs``: forearm and hand, or shin and foot, on fewer than
+that share of the person's pixels, the person segmented as the tracker does;
+``heading.reseat_hidden``, README "A limb tracked hidden").
 
-    .venv/bin/python tools/free_space_limbs.py SEQ TRACK [SEQ TRACK ...] [--share 0.5] [--frames]
+    .venv/bin/python tools/free_space_limbs.py SEQ TRACK [SEQ TRACK ...] [--share 0.5] [--hidden 0.01] [--frames]
 """
 from __future__ import annotations
 
@@ -26,13 +30,15 @@ sys.path.insert(0, str(REPO / "tools"))
 from depthtrack.contract import JOINT_INDEX  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track.heading_settings import HeadingSettings  # noqa: E402
-from depthtrack.track.reach import LIMBS  # noqa: E402
+from depthtrack.track.reach import LIMBS, hidden_limbs  # noqa: E402
 from depthtrack.track.reseat import free_space_limbs  # noqa: E402
 from track_replay import read_track  # noqa: E402
 
 
-def limb_frames(seq, body, poses, share: float, pixels: int, gap: float):
-    """``[(frame, limb, listed, end error (m))]`` for every frame with a pose and every limb."""
+def limb_frames(seq, body, poses, share: float, pixels: int, gap: float, hidden=None):
+    """``[(frame, limb, listed, end error (m))]`` for every frame with a pose and every limb;
+    listed over free space, or with ``hidden`` (a share) tracked hidden."""
+    from depthtrack.detect import segment_foreground
     from depthtrack.render import FrameRenderer
 
     rows = []
@@ -40,9 +46,15 @@ def limb_frames(seq, body, poses, share: float, pixels: int, gap: float):
         for f in range(len(poses)):
             if not np.isfinite(poses[f]).all():
                 continue
-            listed = {name for name, _ in free_space_limbs(
-                renderer.render(body, poses[f]), renderer.render_labels(body, poses[f]),
-                seq.depth(f), body.joint_names, share, pixels, gap)}
+            labels = renderer.render_labels(body, poses[f])
+            if hidden is not None:
+                mask = segment_foreground(seq.depth(f), seq.camera).mask
+                listed = hidden_limbs(labels, mask, body.joint_names,
+                                      int(np.ceil(hidden * np.count_nonzero(mask))))
+            else:
+                listed = {name for name, _ in free_space_limbs(
+                    renderer.render(body, poses[f]), labels, seq.depth(f), body.joint_names,
+                    share, pixels, gap)}
             joints = body.joint_positions(poses[f])
             for limb, (_, _, end) in LIMBS.items():
                 k = JOINT_INDEX[end]
@@ -63,6 +75,8 @@ def main(argv=None) -> int:
                         help="HeadingSettings.reseat_free_pixels")
     parser.add_argument("--gap", type=float, default=h.reseat_free_gap,
                         help="HeadingSettings.reseat_free_gap (m)")
+    parser.add_argument("--hidden", type=float, metavar="SHARE",
+                        help="list the limbs tracked hidden at this share instead (heading.reseat_hidden)")
     parser.add_argument("--far", type=float, default=0.15, help="an end joint this far off (m) is wrong")
     parser.add_argument("--frames", action="store_true", help="print every listed limb-frame")
     args = parser.parse_args(argv)
@@ -72,7 +86,8 @@ def main(argv=None) -> int:
         rows = []
         for seq_dir, track_dir in zip(args.pairs[::2], args.pairs[1::2]):
             seq, body, poses = read_track(seq_dir, track_dir, [])
-            for f, limb, listed, err in limb_frames(seq, body, poses, args.share, args.pixels, args.gap):
+            for f, limb, listed, err in limb_frames(seq, body, poses, args.share, args.pixels, args.gap,
+                                                    args.hidden):
                 rows.append((seq_dir.name, f, limb, listed, err))
                 if listed and args.frames:
                     print(f"{seq_dir.name} frame {f:3d} {limb}: end joint {100 * err:5.1f} cm off")
@@ -82,7 +97,7 @@ def main(argv=None) -> int:
     listed = np.array([r[3] for r in rows], dtype=bool)
     far = np.array([r[4] > args.far for r in rows], dtype=bool)
     print(f"{len(rows)} limb-frames, {far.mean():.1%} with the end joint over {100 * args.far:.0f} cm off; "
-          f"listed over free space: {listed.sum()} ({listed.mean():.1%}), of them that far off "
+          f"listed {'hidden' if args.hidden is not None else 'over free space'}: {listed.sum()} ({listed.mean():.1%}), of them that far off "
           f"{far[listed].mean() if listed.any() else float('nan'):.0%} (precision); "
           f"of those that far off, listed {listed[far].mean() if far.any() else float('nan'):.0%} (recall)")
     return 0

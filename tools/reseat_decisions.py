@@ -10,7 +10,11 @@ worse by more than 2 cm: how good the decision is, apart from where the track go
 (one changed frame changes every frame after it, and a benchmark's paired differences
 mostly measure that).
 
-    .venv/bin/python tools/reseat_decisions.py SEQ TRACK [--every 4] [--json OUT.json]
+With ``--hidden SHARE`` only the frames with a limb tracked hidden (``heading.reseat_hidden``
+= SHARE: its forearm and hand, or shin and foot, on fewer than that share of the person's
+pixels) are tried, and only those limbs re-seated, as the tracker's hidden-limb re-seat does.
+
+    .venv/bin/python tools/reseat_decisions.py SEQ TRACK [--every 4] [--hidden 0.01] [--json OUT.json]
 """
 from __future__ import annotations
 
@@ -26,6 +30,7 @@ sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
+from depthtrack.track.rechecks import tracked_hidden  # noqa: E402
 from depthtrack.track.reseat import best_reseat, limb_climber, limb_library  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
@@ -40,17 +45,21 @@ def main(argv=None) -> int:
     parser = track_parser(__doc__, "tools/reseat_decisions.py OUT/dev/sequences/90_05_c0_s2 "
                                    "OUT/dev/tracks/90_05_c0_s2/hc+ep --every 4")
     parser.add_argument("--every", type=int, default=4, help="every that many frames (from 4)")
+    parser.add_argument("--hidden", type=float, metavar="SHARE",
+                        help="only limbs tracked hidden at this share (heading.reseat_hidden)")
     parser.add_argument("--json", type=pathlib.Path, help="also write the decisions here")
     args = parser.parse_args(argv)
     try:
         if args.every < 1:
             raise InputError(None, f"--every must be at least 1, not {args.every}")
+        if args.hidden is not None and not 0 < args.hidden < 1:
+            raise InputError(None, f"--hidden must be a share between 0 and 1, not {args.hidden}")
         seq, body, poses = read_track(args.seq, args.track, [1])
         frames = list(range(args.every, len(poses), args.every))
     except (InputError, OSError, KeyError) as exc:
         print(f"reseat_decisions: {exc}", file=sys.stderr)
         return 2
-    settings = TrackerSettings()
+    settings = TrackerSettings(heading={"reseat_hidden": args.hidden or 0.0})
     library = limb_library()
     rows = []
     with Tracker(body, seq.camera, method="hc+ep", fps=seq.fps, settings=settings) as tr:
@@ -62,10 +71,15 @@ def main(argv=None) -> int:
         for f in frames:
             if not np.isfinite(poses[f]).all():
                 continue
-            _, energy = frame_energy(tr, seq, poses, f)
+            frame, energy = frame_energy(tr, seq, poses, f)
+            limbs = None
+            if args.hidden is not None:
+                limbs = sorted(tracked_hidden(tr, frame, poses[f]))
+                if not limbs:
+                    continue
             base, e_base = climb(energy, start, poses[f], tr.recorder)
             name, y, e_y = best_reseat(base, energy, limb_climber(energy, start, tr.recorder),
-                                       library, clip=body.clip)
+                                       library, clip=body.clip, limbs=limbs)
             row = {"frame": f, "limb": name, "lead": (e_base - e_y) / abs(e_base),
                    "error_m": error(base, f), "error_reseated_m": error(y, f)}
             rows.append(row)
