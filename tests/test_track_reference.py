@@ -24,7 +24,8 @@ REFERENCE = Path(__file__).resolve().parent / "data" / "tracker_reference.npz"
 #: the heading recheck's judge tile, the final polish of the poses reported (4c788f5), and
 #: the re-seat of a limb over free space (2026-11-30).
 LATER_CHANGES_OFF = {"energy": {"twist_std": 0.0}, "search": {"untwist": []},
-                     "heading": {"judge_tile": 0, "reseat_free": 0.0}, "polish": {"final_tile": 0}}
+                     "heading": {"judge_tile": 0, "reseat_free": 0.0, "reseat_hidden": 0.0},
+                     "polish": {"final_tile": 0}}
 
 
 def _track_both(tmp):

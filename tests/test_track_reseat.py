@@ -187,10 +187,9 @@ def test_a_limb_tracked_hidden_is_reseated_on_the_free_space_looks_frames():
                                    free_limbs=lambda x: [("l_leg", 0.7)], hidden_limbs=hidden)
     event = changes["reseats"][0]
     assert event["limb"] == "l_leg" and event["trigger"] == "free" and event["hidden"] == ["r_arm"]
-    # off by default; and not on a frame the look does not run
-    default = TrackerSettings(heading={"reseat_free_every": 4})
-    assert default.heading.reseat_hidden == 0.0
-    assert not recheck_reseat(state, pose, refit, energy, climb_limb, lib, default,
+    # off; and not on a frame the look does not run
+    off = TrackerSettings(heading={"reseat_free_every": 4, "reseat_hidden": 0.0})
+    assert not recheck_reseat(state, pose, refit, energy, climb_limb, lib, off,
                               free_limbs=none_free, hidden_limbs=hidden)[2]
     odd = TrackingState(log=({},) * 9)
     assert not recheck_reseat(odd, pose, refit, energy, climb_limb, lib, on,

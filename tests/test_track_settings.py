@@ -68,6 +68,7 @@ def test_a_preset_is_the_defaults_with_its_groups_changed():
     # the default takes a fresh look every 8th frame; the fast preset none (as measured)
     assert TrackerSettings().judge.look_every == 8 and fast.judge.look_every == 0
     assert TrackerSettings().heading.reseat_free == 0.5 and fast.heading.reseat_free == 0.0
+    assert TrackerSettings().heading.reseat_hidden == 0.01 and fast.heading.reseat_hidden == 0.0
     # everything the preset does not name stays at its default
     assert fast.heading.frames == HeadingSettings().frames and fast.search.levels == SearchSettings().levels
     assert set(PRESETS) == {"default", "fast"}

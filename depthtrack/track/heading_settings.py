@@ -250,7 +250,8 @@ class HeadingSettings:
     is unless a library pose explains the image better by the margin. Named from the dev
     tracks: a limb tracked hidden behind the body while the real one is in view is the
     commoner miss, and the free-space look never sees it (README, "A limb tracked hidden").
-    Off by default.
+    0.01 by default since 2026-11-30 (dev, 42 paired: see the README); ``--preset fast``
+    leaves it out.
 
     ``margins_over``: what ``limb_margin``, ``reseat_margin`` and
     :attr:`~.settings.ProposalSettings.reach_margin` are fractions of (:data:`MARGIN_BASES`,
@@ -396,7 +397,7 @@ class HeadingSettings:
     reseat_free_gap: float = 0.25
     reseat_free_every: int = 4
     reseat_free_climbed: bool = False
-    reseat_hidden: float = 0.0
+    reseat_hidden: float = 0.01
     retro_frames: int = 50
     retro_margin: float = 0.05
     retro_after: tuple = ("heading", "limbs", "recovery")

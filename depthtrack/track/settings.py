@@ -383,13 +383,13 @@ class TrackerSettings:
 #: and the limbs' sides every 8th frame, the reach every 4th) -- the rechecks climb two or
 #: three poses from the coarsest rung each and were two thirds of the candidates scored; and
 #: no fresh look (``judge.look_every`` 0: a fifth of a frame's time; the preset as measured)
-#: nor re-seat of a limb over free space (``heading.reseat_free`` 0, the default since
-#: 2026-11-30; the preset as measured).
+#: nor re-seat of a limb over free space or tracked hidden (``heading.reseat_free`` and
+#: ``reseat_hidden`` 0, the defaults since 2026-11-30; the preset as measured).
 PRESETS = {
     "default": {},
     "fast": {"shape": {"enabled": False}, "search": {"passes": 1},
              "polish": {"fine_tile": 0, "final_tile": 0},
-             "heading": {"every": 8, "limb_every": 8, "reseat_free": 0.0},
+             "heading": {"every": 8, "limb_every": 8, "reseat_free": 0.0, "reseat_hidden": 0.0},
              "propose": {"reach_every": 4},
              "judge": {"look_every": 0}},
 }
