@@ -118,6 +118,23 @@ def test_a_limb_the_camera_sees_through_is_over_free_space():
     assert free_space_limbs(model, labels, depth, names, share=0.5, gap=2.5) == []
 
 
+def two_limb_energy(first, first_target, second, second_target):
+    """A toy recheck energy: 100 plus the L1 distance of limb ``first``'s angles to
+    ``first_target (6,)`` and five times limb ``second``'s to ``second_target``; with the refit
+    and the limb climb that leave a pose as it is. Returns ``(energy, refit, climb_limb)``."""
+    def energy(poses):
+        p = np.atleast_2d(poses)
+        return (100.0 + np.abs(p[:, LIMB_SLOTS[first]] - first_target).sum(axis=1)
+                + 5.0 * np.abs(p[:, LIMB_SLOTS[second]] - second_target).sum(axis=1))
+
+    def refit(pose):
+        return pose, float(energy(pose)[0])
+
+    def climb_limb(pose, limb):
+        return pose, float(energy(pose)[0])
+    return energy, refit, climb_limb
+
+
 def test_a_limb_over_free_space_is_reseated_alone_on_any_frame():
     """The recheck with ``reseat_free``: on a frame the periodic re-seat is not due, a limb
     the frame lists as over free space is re-seated (only it: the left arm, which would gain
@@ -126,14 +143,7 @@ def test_a_limb_over_free_space_is_reseated_alone_on_any_frame():
     lib = {"arm": np.array([[0.0] * 6, [-1.4, 0.0, 0.0, -0.5, 0.0, 0.0]]),
            "leg": np.array([[0.0] * 6])}
     target = lib["arm"][1] * MIRROR
-
-    def energy(poses):
-        p = np.atleast_2d(poses)
-        return (100.0 + np.abs(p[:, LIMB_SLOTS["r_arm"]] - target).sum(axis=1)
-                + 5.0 * np.abs(p[:, LIMB_SLOTS["l_arm"]] - lib["arm"][1]).sum(axis=1))
-
-    refit = lambda pose: (pose, float(energy(pose)[0]))                  # noqa: E731
-    climb_limb = lambda pose, limb: (pose, float(energy(pose)[0]))       # noqa: E731
+    energy, refit, climb_limb = two_limb_energy("r_arm", target, "l_arm", lib["arm"][1])
     state = TrackingState(log=({},) * 6)                # frame 6: looked for every 2nd frame
     pose = np.zeros(48)
     s = TrackerSettings(heading={"reseat_free": 0.5, "reseat_free_every": 2})
@@ -158,18 +168,11 @@ def test_a_limb_tracked_hidden_is_reseated_on_the_free_space_looks_frames():
     """The recheck with ``reseat_hidden``: a limb the frame lists as hidden is re-seated
     (only it) on the frames the free-space look runs, its entry says ``"trigger":
     "hidden"``; a limb over free space and a hidden one are tried together (the entry's
-    trigger "free", both listed); off (the default), or on other frames, nothing happens."""
+    trigger "free", both listed); off, or on other frames, nothing happens."""
     lib = {"arm": np.array([[0.0] * 6, [-1.4, 0.0, 0.0, -0.5, 0.0, 0.0]]),
            "leg": np.array([[0.0] * 6, [0.9, 0.0, 0.0, 0.8, 0.0, 0.0]])}
     arm = lib["arm"][1] * MIRROR
-
-    def energy(poses):
-        p = np.atleast_2d(poses)
-        return (100.0 + np.abs(p[:, LIMB_SLOTS["r_arm"]] - arm).sum(axis=1)
-                + 5.0 * np.abs(p[:, LIMB_SLOTS["l_leg"]] - lib["leg"][1]).sum(axis=1))
-
-    refit = lambda pose: (pose, float(energy(pose)[0]))                  # noqa: E731
-    climb_limb = lambda pose, limb: (pose, float(energy(pose)[0]))       # noqa: E731
+    energy, refit, climb_limb = two_limb_energy("r_arm", arm, "l_leg", lib["leg"][1])
     state = TrackingState(log=({},) * 8)
     pose = np.zeros(48)
     on = TrackerSettings(heading={"reseat_hidden": 0.01, "reseat_free_every": 4})
