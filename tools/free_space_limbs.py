@@ -10,7 +10,7 @@ recall), and with ``--frames`` each listed limb-frame. Nothing is tracked; how t
 free-space re-seat (``heading.reseat_free``) was named (README, "A limb over free space").
 With ``--hidden SHARE`` the limbs listed are those tracked hidden instead
 (``depthtrack.track.reach.hidden_limbs``: forearm and hand, or shin and foot, on fewer than
-that share of the person's pixels, the person segmented as the tracker does;
+that share of the person's pixels, the person segmented by ``segment_foreground``;
 ``heading.reseat_hidden``, README "A limb tracked hidden").
 
     .venv/bin/python tools/free_space_limbs.py SEQ TRACK [SEQ TRACK ...] [--share 0.5] [--hidden 0.01] [--frames]
@@ -97,7 +97,8 @@ def main(argv=None) -> int:
     listed = np.array([r[3] for r in rows], dtype=bool)
     far = np.array([r[4] > args.far for r in rows], dtype=bool)
     print(f"{len(rows)} limb-frames, {far.mean():.1%} with the end joint over {100 * args.far:.0f} cm off; "
-          f"listed {'hidden' if args.hidden is not None else 'over free space'}: {listed.sum()} ({listed.mean():.1%}), of them that far off "
+          f"listed {'hidden' if args.hidden is not None else 'over free space'}: "
+          f"{listed.sum()} ({listed.mean():.1%}), of them that far off "
           f"{far[listed].mean() if listed.any() else float('nan'):.0%} (precision); "
           f"of those that far off, listed {listed[far].mean() if far.any() else float('nan'):.0%} (recall)")
     return 0

@@ -74,7 +74,7 @@ def main(argv=None) -> int:
             frame, energy = frame_energy(tr, seq, poses, f)
             limbs = None
             if args.hidden is not None:
-                limbs = sorted(tracked_hidden(tr, frame, poses[f]))
+                limbs = sorted(tracked_hidden(tr, frame, tr.renderers.labels(poses[f])))
                 if not limbs:
                     continue
             base, e_base = climb(energy, start, poses[f], tr.recorder)

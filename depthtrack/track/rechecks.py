@@ -72,11 +72,19 @@ def recheck_stage(tracker, state, energy, frame, x):
             return y, {**changes, **more}, "reach"
     if s.heading.reseat_every or s.heading.reseat_free or s.heading.reseat_hidden:
         climb_limb = limb_climber(bare, tracker.climbers.start, recorder, s.heading.refit_level)
+        drawn = {}                       # a pose's labels, rendered once for both looks
+
+        def labels(pose):
+            key = np.asarray(pose, dtype=np.float64).tobytes()
+            if key not in drawn:
+                drawn[key] = tracker.renderers.labels(pose)
+            return drawn[key]
         with recorder.timed("reseat"):
             y, more, reseated = recheck_reseat(
                 state, x, refit, bare, climb_limb, limb_library(), s, clip=tracker.body.clip,
-                floor=floor, free_limbs=lambda pose: over_free_space(tracker, frame, pose),
-                hidden_limbs=lambda pose: tracked_hidden(tracker, frame, pose))
+                floor=floor,
+                free_limbs=lambda pose: over_free_space(tracker, frame, pose, labels(pose)),
+                hidden_limbs=lambda pose: tracked_hidden(tracker, frame, labels(pose)))
         if reseated:
             return y, {**changes, **more}, "reseat"
     if not due(state, s.heading.search_every):
@@ -90,23 +98,23 @@ def recheck_stage(tracker, state, energy, frame, x):
     return taken, {**changes, **more}, "search"
 
 
-def over_free_space(tracker, frame, pose):
-    """:func:`.reseat.free_space_limbs` of ``pose (48,)`` on ``frame`` (two full-image renders),
-    by :attr:`HeadingSettings.reseat_free`, ``reseat_free_pixels`` and ``reseat_free_gap``."""
+def over_free_space(tracker, frame, pose, labels):
+    """:func:`.reseat.free_space_limbs` of ``pose (48,)`` on ``frame`` (one full-image depth
+    render; ``labels (H, W)``: the pose's part labels), by :attr:`HeadingSettings.reseat_free`,
+    ``reseat_free_pixels`` and ``reseat_free_gap``."""
     h = tracker.settings.heading
     r = tracker.renderers
-    return free_space_limbs(r.depth(pose), r.labels(pose), frame.depth, r.body.joint_names,
+    return free_space_limbs(r.depth(pose), labels, frame.depth, r.body.joint_names,
                             h.reseat_free, h.reseat_free_pixels, h.reseat_free_gap)
 
 
-def tracked_hidden(tracker, frame, pose):
-    """:func:`.reach.hidden_limbs` of ``pose (48,)`` on ``frame`` (one full-image render): the
+def tracked_hidden(tracker, frame, labels):
+    """:func:`.reach.hidden_limbs` of a pose on ``frame`` from its part labels ``(H, W)``: the
     limbs whose lower segment shows on fewer than :attr:`HeadingSettings.reseat_hidden` of
     the person's pixels."""
     mask = frame.foreground.mask
     least = int(np.ceil(tracker.settings.heading.reseat_hidden * np.count_nonzero(mask)))
-    return hidden_limbs(tracker.renderers.labels(pose), mask, tracker.renderers.body.joint_names,
-                        least)
+    return hidden_limbs(labels, mask, tracker.renderers.body.joint_names, least)
 
 
 def close_call_polish(tracker):
