@@ -38,15 +38,11 @@ def recheck_stage(tracker, state, energy, frame, x):
     """
     s, recorder = tracker.settings, tracker.recorder
     bare = energy.without_prior().on(tracker.renderers.at_tile(s.heading.recheck_tile))
-    fitted = {}                          # the tracked pose is climbed once for every recheck
     floor = margin_floor(bare, s.heading.margins_over)
-
-    def refit(pose):
-        key = np.asarray(pose, dtype=np.float64).tobytes()
-        if key not in fitted:
-            fitted[key] = climb(bare, tracker.climbers.start, pose, recorder,
-                                passes=s.heading.twin_passes, level_offset=s.heading.refit_level)
-        return fitted[key]
+    # the tracked pose is climbed once for every recheck
+    refit = once_per_pose(lambda pose: climb(bare, tracker.climbers.start, pose, recorder,
+                                             passes=s.heading.twin_passes,
+                                             level_offset=s.heading.refit_level))
 
     pixels = float(np.count_nonzero(frame.foreground.mask))
     judge_tile = s.heading.judge_tile
@@ -72,13 +68,7 @@ def recheck_stage(tracker, state, energy, frame, x):
             return y, {**changes, **more}, "reach"
     if s.heading.reseat_every or s.heading.reseat_free or s.heading.reseat_hidden:
         climb_limb = limb_climber(bare, tracker.climbers.start, recorder, s.heading.refit_level)
-        drawn = {}                       # a pose's labels, rendered once for both looks
-
-        def labels(pose):
-            key = np.asarray(pose, dtype=np.float64).tobytes()
-            if key not in drawn:
-                drawn[key] = tracker.renderers.labels(pose)
-            return drawn[key]
+        labels = once_per_pose(tracker.renderers.labels)     # for both looks
         with recorder.timed("reseat"):
             y, more, reseated = recheck_reseat(
                 state, x, refit, bare, climb_limb, limb_library(), s, clip=tracker.body.clip,
@@ -96,6 +86,19 @@ def recheck_stage(tracker, state, energy, frame, x):
     if taken is None:
         return x, changes, None
     return taken, {**changes, **more}, "search"
+
+
+def once_per_pose(compute):
+    """``compute`` (``pose (48,) -> anything``) remembered per pose: asked again for the same
+    pose, the first answer."""
+    done = {}
+
+    def remembered(pose):
+        key = np.asarray(pose, dtype=np.float64).tobytes()
+        if key not in done:
+            done[key] = compute(pose)
+        return done[key]
+    return remembered
 
 
 def over_free_space(tracker, frame, pose, labels):
