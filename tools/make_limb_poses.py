@@ -35,10 +35,8 @@ from depthtrack.body.model import BodyModel  # noqa: E402
 from depthtrack.body.skeleton import LOWER, UPPER  # noqa: E402
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.io.atomic import write_bytes_atomic  # noqa: E402
-from depthtrack.io.bvh import read_bvh  # noqa: E402
-from depthtrack.motion.retarget import resample_poses, retarget  # noqa: E402
 from depthtrack.track.reseat import LIMB_SLOTS, MIRROR  # noqa: E402
-from make_motion_prior import train_clips  # noqa: E402
+from make_motion_prior import clip_poses, train_clips  # noqa: E402
 
 
 def limb_samples(poses):
@@ -95,9 +93,7 @@ def main(argv=None) -> int:
     body = BodyModel.default()
     samples = {"arm": [], "leg": []}
     for f in files:
-        motion = read_bvh(f)
-        poses = retarget(motion, body)
-        poses = resample_poses(poses[motion.leading_jump():], motion.fps, args.fps)
+        poses, _, _ = clip_poses(f, body, args.fps)
         for kind, s in limb_samples(poses).items():
             samples[kind].append(s)
         print(f"{f.name}: {len(poses)} frames at {args.fps:g} Hz")

@@ -54,12 +54,18 @@ def train_clips(data_dir, split_path=SPLIT):
     return [Path(data_dir) / rel for rel in split["train"]]
 
 
-def clip_accelerations(path, body, analysis_fps, joint_map=None):
-    """(K, 48) accelerations of one BVH clip at ``analysis_fps``, and a description of it."""
+def clip_poses(path, body, analysis_fps, joint_map=None):
+    """``(poses (K, 48), motion, dropped)``: one BVH clip retargeted onto ``body`` and
+    resampled to ``analysis_fps``, its leading T-pose jump (``dropped`` frames) left out."""
     motion = read_bvh(path, joint_map=joint_map)
     poses = retarget(motion, body)
     dropped = motion.leading_jump()
-    poses = resample_poses(poses[dropped:], motion.fps, analysis_fps)
+    return resample_poses(poses[dropped:], motion.fps, analysis_fps), motion, dropped
+
+
+def clip_accelerations(path, body, analysis_fps, joint_map=None):
+    """(K, 48) accelerations of one BVH clip at ``analysis_fps``, and a description of it."""
+    poses, motion, dropped = clip_poses(path, body, analysis_fps, joint_map)
     acc = accelerations_of(poses, analysis_fps)
     info = {"file": Path(path).name, "source_fps": round(motion.fps, 3), "frames": int(len(poses)),
             "units_m": motion.units_m, "units_source": motion.units_source,

@@ -133,7 +133,9 @@ class EnergySettings:
         standard deviations (:class:`~depthtrack.motion.prior.ConstantVelocityPrior`,
         ``huber``): a change of velocity beyond it costs linearly, not quadratically. 3 on
         dev at the default of 2026-11-30: +1.9 points over 42 tracks, but one lost 5.5, so
-        not the default (README, "A kick's accelerations, again").
+        not the default (README, "A kick's accelerations, again"); on top of the hidden
+        re-seat +0.7 over the 42 and +2.5 over the 27 off-front parity tracks, one dev
+        track lost 6.0, still not ("A kick's accelerations, a third time").
     likelihood_weight : float
         ``w`` of the energy.
     pose_prior_std : float
