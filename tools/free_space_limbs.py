@@ -38,7 +38,7 @@ from depthtrack.body.skeleton import JOINT_ID  # noqa: E402
 from depthtrack.contract import JOINT_INDEX  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track.heading_settings import HeadingSettings  # noqa: E402
-from depthtrack.track.reach import LIMBS, hidden_limbs  # noqa: E402
+from depthtrack.track.reach import LIMBS, hidden_limbs, share_in_pixels  # noqa: E402
 from depthtrack.track.reseat import free_space_limbs  # noqa: E402
 from track_replay import read_track  # noqa: E402
 
@@ -83,13 +83,10 @@ def prior_substitutes(mean, cov):
 def train_rotation_gaussian(data_dir):
     """:func:`rotation_gaussian` of the train clips' poses at 30 Hz on the default body."""
     from depthtrack.body import BodyModel
-    from make_motion_prior import clip_poses, train_clips
+    from make_motion_prior import clip_poses, present_train_clips
 
     body = BodyModel.default()
-    files = train_clips(data_dir)
-    missing = [str(f) for f in files if not f.is_file()]
-    if missing:
-        raise InputError(None, f"train clips not found: {', '.join(missing)}")
+    files = present_train_clips(data_dir)   # FileNotFoundError names the missing ones
     return rotation_gaussian(np.concatenate([clip_poses(f, body, 30.0)[0] for f in files]))
 
 
@@ -110,8 +107,7 @@ def limb_frames(seq, body, poses, share: float, pixels: int, gap: float, hidden=
             labels = renderer.render_labels(body, poses[f])
             if hidden is not None:
                 mask = segment_foreground(seq.depth(f), seq.camera).mask
-                listed = hidden_limbs(labels, mask, body.joint_names,
-                                      int(np.ceil(hidden * np.count_nonzero(mask))))
+                listed = hidden_limbs(labels, mask, body.joint_names, share_in_pixels(mask, hidden))
             else:
                 listed = {name for name, _ in free_space_limbs(
                     renderer.render(body, poses[f]), labels, seq.depth(f), body.joint_names,

@@ -36,7 +36,7 @@ from depthtrack.body.skeleton import LOWER, UPPER  # noqa: E402
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.io.atomic import write_bytes_atomic  # noqa: E402
 from depthtrack.track.reseat import LIMB_SLOTS, MIRROR  # noqa: E402
-from make_motion_prior import clip_poses, train_clips  # noqa: E402
+from make_motion_prior import clip_poses, present_train_clips  # noqa: E402
 
 
 def limb_samples(poses):
@@ -85,10 +85,10 @@ def main(argv=None) -> int:
     parser.add_argument("--fps", type=float, default=10.0)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
-    files = train_clips(args.data)
-    missing = [str(f) for f in files if not f.is_file()]
-    if missing:
-        print(f"make_limb_poses: train clips not found: {', '.join(missing)}", file=sys.stderr)
+    try:
+        files = present_train_clips(args.data)
+    except FileNotFoundError as exc:
+        print(f"make_limb_poses: {exc}", file=sys.stderr)
         return 2
     body = BodyModel.default()
     samples = {"arm": [], "leg": []}

@@ -54,6 +54,16 @@ def train_clips(data_dir, split_path=SPLIT):
     return [Path(data_dir) / rel for rel in split["train"]]
 
 
+def present_train_clips(data_dir, split_path=SPLIT):
+    """:func:`train_clips`, each checked to be there; raises :class:`FileNotFoundError`
+    naming every one that is not ("train clips not found: ...")."""
+    files = train_clips(data_dir, split_path)
+    missing = [str(f) for f in files if not f.is_file()]
+    if missing:
+        raise FileNotFoundError(f"train clips not found: {', '.join(missing)}")
+    return files
+
+
 def clip_poses(path, body, analysis_fps, joint_map=None):
     """``(poses (K, 48), motion, dropped)``: one BVH clip retargeted onto ``body`` and
     resampled to ``analysis_fps``, its leading T-pose jump (``dropped`` frames) left out."""
@@ -86,10 +96,10 @@ def main(argv=None):
     parser.add_argument("--analysis-fps", type=float, default=30.0)
     args = parser.parse_args(argv)
 
-    files = [] if args.inputs else train_clips(args.data)
-    missing = [str(f) for f in files if not f.is_file()]
-    if missing:
-        print(f"make_motion_prior: train clips not found: {', '.join(missing)}", file=sys.stderr)
+    try:
+        files = [] if args.inputs else present_train_clips(args.data)
+    except FileNotFoundError as exc:
+        print(f"make_motion_prior: {exc}", file=sys.stderr)
         return 2
     for item in args.inputs:
         p = Path(item)

@@ -158,6 +158,13 @@ def unexplained_blobs(model_depth, person_depth, camera, min_pixels: int, gap: f
     return out
 
 
+def share_in_pixels(mask, share: float) -> int:
+    """The fewest pixels that make the fraction ``share`` of ``mask``'s (``(H, W)`` bool; at
+    least one where ``share`` > 0 and the mask has any): the threshold of
+    :func:`hidden_limbs` and :func:`unexplained_blobs` given as a share of the person."""
+    return int(np.ceil(share * np.count_nonzero(mask)))
+
+
 def hidden_limbs(labels, person, joint_names, min_pixels: int) -> set:
     """The limbs whose lower segment (forearm and hand, shin and foot) shows on fewer than
     ``min_pixels`` of the person's pixels: hidden behind the body or off the person.

@@ -18,7 +18,7 @@ from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, r
                       recheck_limb_sides, swapped_twins, turned_pose)
 from .proposals import frame_proposals
 from .reach import (blob_reach_candidates, hidden_limbs, reach_candidates, recheck_reach,
-                    unexplained_blobs)
+                    share_in_pixels, unexplained_blobs)
 from .reseat import free_space_limbs, limb_climber, limb_library, recheck_reseat
 from .search import climb
 from .start import global_search, start_up, wrong_side
@@ -116,7 +116,7 @@ def tracked_hidden(tracker, frame, labels):
     limbs whose lower segment shows on fewer than :attr:`HeadingSettings.reseat_hidden` of
     the person's pixels."""
     mask = frame.foreground.mask
-    least = int(np.ceil(tracker.settings.heading.reseat_hidden * np.count_nonzero(mask)))
+    least = share_in_pixels(mask, tracker.settings.heading.reseat_hidden)
     return hidden_limbs(labels, mask, tracker.renderers.body.joint_names, least)
 
 
@@ -145,7 +145,7 @@ def reach_all(tracker, frame, pose):
     if s.reach_unexplained > 0:
         mask = frame.foreground.mask
         person = np.where(mask, frame.depth, 0.0)
-        least = int(np.ceil(s.reach_unexplained * np.count_nonzero(mask)))
+        least = share_in_pixels(mask, s.reach_unexplained)
         blobs = unexplained_blobs(tracker.renderers.depth(pose), person, tracker.camera, least)
         free = None
         if blobs and s.reach_hidden_only:

@@ -241,10 +241,10 @@ def recheck_reseat(state, pose, refit, energy, climb_limb, library, settings, cl
     if not due(state, h.reseat_every):
         looking = due(state, h.reseat_free_every)
         free = free_limbs(pose) if free_limbs is not None and h.reseat_free > 0 and looking else []
-        hidden = (hidden_limbs(pose) if hidden_limbs is not None and h.reseat_hidden > 0
-                  and looking else set())
+        listed_hidden = (hidden_limbs(pose) if hidden_limbs is not None and h.reseat_hidden > 0
+                         and looking else set())
         free_names = [name for name, _ in free]
-        hidden = [name for name in LIMB_SLOTS if name in hidden and name not in free_names]
+        hidden = [name for name in LIMB_SLOTS if name in listed_hidden and name not in free_names]
         if not free and not hidden:
             return pose, {}, False
         limbs = free_names + hidden
