@@ -95,7 +95,8 @@ def test_huber_penalty_is_quadratic_inside_and_linear_beyond():
 def test_prior_huber_setting_layers_and_is_checked():
     from depthtrack.errors import InputError
     from depthtrack.track.settings import EnergySettings, TrackerSettings
-    assert EnergySettings().prior_huber == 0.0
+    assert EnergySettings().prior_huber == 3.0                   # the default since 2026-11-30
+    assert TrackerSettings().updated({"energy": {"prior_huber": 0.0}}).energy.prior_huber == 0.0
     assert TrackerSettings().updated({"energy": {"prior_huber": 3.0}}).energy.prior_huber == 3.0
     with pytest.raises(InputError, match="prior_huber"):
         EnergySettings(prior_huber=-1.0)

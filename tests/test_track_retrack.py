@@ -20,7 +20,8 @@ def test_the_frames_before_a_switch_are_tracked_again_backwards(squat):
     body = BodyModel.default(height=1.75)
     truth = squat.joints
     x0 = turned_pose(fit_pose_to_joints(body, truth[0]))
-    alone = TrackerSettings().updated({"search": {"untwist": []}})
+    # the Gaussian motion prior: under Huber's loss the search turns the start by itself
+    alone = TrackerSettings().updated({"search": {"untwist": []}, "energy": {"prior_huber": 0.0}})
     retro = alone.updated({"heading": {"retro_frames": 10}})
     pulled, poses = [], {}
 
@@ -143,3 +144,48 @@ def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
     assert reach_after(start, "limbs", 10, default)["recovery"] == 3
     with pytest.raises(ValueError, match="retro_stop"):
         TrackerSettings(heading={"retro_stop": "never"})
+
+
+def test_a_settled_track_gives_the_frames_from_the_start_where_it_did_better():
+    from depthtrack.track.retrack import settled_frames
+    # nearest the settled frame first: alike there, better next to the start
+    assert settled_frames([[1.0, 1.0]] * 4 + [[0.5, 1.0]] * 2) == 2
+    # worse next to the start, alike after it: nothing
+    assert settled_frames([[1.0, 1.0]] * 4 + [[1.5, 1.0]]) == 0
+    # alike from the start, better next to the settled frame: the sum from the start is
+    # lowest at the far end, so the whole backward track (the first of equal minima is
+    # where a tie would stop)
+    assert settled_frames([[0.5, 1.0]] * 2 + [[1.0, 1.0]] * 4) == 6
+    # a frame worse next to the start, made up for by the one after it
+    assert settled_frames([[1.0, 1.0], [0.4, 1.0], [1.2, 1.0]]) == 2
+    assert settled_frames(np.zeros((0, 2))) == 0
+    with pytest.raises(ValueError, match="retro_settle"):
+        TrackerSettings(heading={"retro_settle": -1})
+
+
+def test_a_start_wrong_in_one_arm_is_tracked_again_from_where_the_track_settled(squat12):
+    """retro_settle: a start with the right arm raised 64 cm off, which the track puts right
+    on the next frame by itself (no correction to re-track from), gets its first frames
+    tracked again backwards from frame 6 and frame 0 comes out right."""
+    body = BodyModel.default(height=1.75)
+    truth = squat12.joints
+    x0 = fit_pose_to_joints(body, truth[0])
+    x0[POSE_INDEX["r_shoulder_rz"]] += 1.2                     # the right arm up and out
+    wrist = 8                                                    # contract joint r_wrist
+    start_error = np.linalg.norm(np.asarray(body.joint_positions(x0))[wrist] - truth[0][wrist])
+    assert start_error > 0.4
+    settings = TrackerSettings().updated({"heading": {"retro_settle": 6, "retro_frames": 12}})
+    with Tracker(body, squat12.camera, settings=settings) as tracker:
+        poses = dict(tracker.stream((squat12.depth(j) for j in range(len(squat12))),
+                                    init_pose=x0))
+        info = tracker.describe()
+    settled = [r for r in info["retracks"] if r["kind"] == "settle"]
+    assert len(settled) == 1
+    entry = settled[0]
+    # frames 5 back to 0, all of them: no agreement stops it, no giving up on the way
+    assert entry["index"] == 6 and entry["frames"] == 6 and entry["first"] == 0
+    assert entry["taken"] and entry["first_taken"] == 0
+    joints = np.asarray(body.joint_positions(np.array([poses[i] for i in range(len(squat12))])))
+    err = point_errors(joints, truth)
+    assert err[0, wrist] < 0.1
+    assert err.max() < 0.15

@@ -52,6 +52,8 @@ def stream_poses(tracker, frames, init_pose=None):
     recent = collections.deque(maxlen=max(retro, 1))   # (index, depth) a correction may re-track
     # the first frame each kind's re-track may reach: the start, or past an earlier correction
     lowest = dict.fromkeys(CORRECTION_ORDER, 0)
+    # the frame whose pose the frames back to the last start are re-tracked from (-1: none)
+    settle, settle_at = s.heading.retro_settle, -1
 
     def take(n):
         out = [pending.popleft() for _ in range(min(n, len(pending)))]
@@ -67,6 +69,7 @@ def stream_poses(tracker, frames, init_pose=None):
             tracker.state, _, x = tracker.start(tracker.state, depth, pose=init_pose)
             held.append((i, x))
             recent.append((i, depth))
+            settle_at = i + settle if settle else -1
         elif tracker.state.pose is not None:
             before = tracker.state
             _advance_into(tracker, held, i, depth)
@@ -79,6 +82,9 @@ def stream_poses(tracker, frames, init_pose=None):
                 # evidence, may go back past it (JudgeSettings.look_every)
                 if not revoked and not look:
                     lowest = reach_after(lowest, kind, i, s.heading.retro_stop)
+            elif i == settle_at and retro and tracker.state.pose is not None:
+                # back to the start, or to the last correction re-tracked since
+                retrack_before_correction(tracker, held, recent, max(lowest.values()), i, "settle")
             recent.append((i, depth))
         else:
             with tracker.recorder.timed("segment"):
@@ -122,6 +128,7 @@ def stream_poses(tracker, frames, init_pose=None):
                         **tracker.state.init_info, "deferred_frames": len(early)}, **{
                         key: getattr(tracker.state, key) + found for key, found in events.items()})
                 held.extend(started)
+                settle_at = max(started[0][0] + settle, i + 1) if settle else -1
         _stamp_indices(tracker.state.log, i)
         # frames of a streak without a person stay held: a dropped track drops them too
         # and the last retro_frames poses, which a correction may yet re-track

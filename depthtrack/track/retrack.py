@@ -25,14 +25,16 @@ CORRECTION_ORDER = ("heading", "recovery", "limbs")
 _HEADING_OFF = {"every": 0, "search_every": 0}
 RETRO_OFF = {"heading": _HEADING_OFF,
              "limbs": {**_HEADING_OFF, "limb_every": 0},
-             "recovery": {**_HEADING_OFF, "limb_every": 0}}
+             "recovery": {**_HEADING_OFF, "limb_every": 0},
+             "settle": {**_HEADING_OFF, "limb_every": 0}}
 
 #: Mean joint distance (m) under which a backward track after a recovery agrees with the
 #: forward one: from there back the forward track was found already.
 RETRO_AGREE_M = 0.05
 
 #: ``stopped`` of a re-track entry where the forward track had the correction already.
-STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "agrees"}
+STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "agrees",
+               "settle": "agrees"}
 
 
 def reach_after(lowest: dict, kind: str, at: int, stop: str) -> dict:
@@ -63,7 +65,11 @@ def _forward_agrees(kind, detail, backward, forward) -> bool:
     """Whether the forward track's joints ``forward (15, 3)`` already have what the
     correction of ``kind`` gave the backward track's ``backward (15, 3)``: the heading
     (trunks less than a quarter turn apart), the limb pair ``detail``'s sides, or (after a
-    recovery) the pose, within :data:`RETRO_AGREE_M` on average."""
+    recovery) the pose, within :data:`RETRO_AGREE_M` on average. Never after a start
+    settled (``"settle"``): the forward track agrees next to the frame it settled on and
+    may differ only near the start, so the backward track runs back to it."""
+    if kind == "settle":
+        return False
     b, f = backward[None], forward[None]
     if kind == "heading":
         return not back_to_front(f, b)[0]
@@ -76,7 +82,10 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
                               kind: str = "heading") -> bool:
     """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``at``: the
     frames before it tracked again backwards from the corrected pose
-    (:attr:`HeadingSettings.retro_frames`, ``retro_after``).
+    (:attr:`HeadingSettings.retro_frames`, ``retro_after``). Or, ``kind`` ``"settle"``,
+    :attr:`HeadingSettings.retro_settle` frames after a start: the frames back to the start
+    tracked again from the pose the track has settled into (a start wrong in a limb that the
+    track found by itself a few frames later, with no correction to re-track from).
 
     The backward track runs with the recheck that made the correction off (it must keep the
     correction's choice, :data:`RETRO_OFF`) and without fresh looks (:data:`.judge.NO_LOOK`)
@@ -93,7 +102,8 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
     exceeds the forward poses' on the same frames by more than the fraction
-    ``retro_margin``. The correction is the evidence: frames before it where one heading
+    ``retro_margin`` (after a start, ``kind`` ``"settle"``: by anything at all, no margin:
+    nothing was corrected, so the backward track has only its energy to go by). The correction is the evidence: frames before it where one heading
     (or one side for the limbs) explained the image clearly better would have been corrected
     sooner, so there the two score alike, and the backward track's continuity with the
     corrected pose is what tells them apart; the margin only refuses a backward track that
@@ -108,6 +118,10 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     """
     settings = tracker.settings
     h = settings.heading
+    margin = 0.0 if kind == "settle" else h.retro_margin
+    # after a start the frames next to the settled pose score alike, noise either way: no
+    # giving up on them before the backward track reaches the start
+    give_up = 0 if kind == "settle" else h.retro_give_up
     corrected = tracker.state
     detail = corrected.limb_swaps[-1]["limbs"] if kind == "limbs" else None
     where = {index: k for k, (index, _) in enumerate(held)}
@@ -135,7 +149,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             indices.append(index)
             backward.append(state.log[-1]["cost"])
             judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
-            if gave_up(judged, h.retro_margin, h.retro_give_up):
+            if gave_up(judged, margin, give_up):
                 stopped = "worse"
                 break
     entry = {"kind": kind, "index": at, "frames": len(indices),
@@ -145,20 +159,27 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         e_back, e_forward = np.mean(judged, axis=0)
         better = best_prefix(judged, 0.0)
         # (a track given up on scores above the margin over the frames it reached)
-        n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
+        n = (len(indices) if e_back <= e_forward * (1.0 + margin) else
              better if h.retro_take == "prefix" else 0)
+        if kind == "settle":
+            n = settled_frames(judged)
         rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
                 settings.judge.look_revoke if was_look(corrected, kind) else "never")
         revoke = revokes(rule, n, better, len(indices), outscored=e_back > e_forward,
                          met=stopped == STOP_LABELS["heading"])
         n = 0 if revoke else n
+        # frames taken, newest first: from the correction back, or (settle) the oldest
+        taken = indices[len(indices) - n:] if kind == "settle" else indices[:n]
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
                      energy_backward=round(float(e_back), 1),
                      share_forward=round(float(np.mean([shares[j] for j in indices])), 4),
                      share_backward=round(float(np.mean(backward)), 4),
-                     frames_taken=n, **({"first_taken": indices[n - 1]} if n else {}))
-        for index, x in zip(indices[:n], poses[:n]):
+                     frames_taken=n, **({"first_taken": taken[-1], "last_taken": taken[0]}
+                                        if n else {}))
+        for index, x in zip(indices, poses):
+            if index not in taken:
+                continue
             held[where[index]] = (index, x)
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
     return revoke
@@ -238,6 +259,17 @@ def best_prefix(judged, margin: float) -> int:
         return 0
     k = int(np.argmin(d))
     return k + 1 if d[k] <= 0 else 0
+
+
+def settled_frames(judged) -> int:
+    """How many frames of a backward track after a start (``"settle"``,
+    :attr:`HeadingSettings.retro_settle`) replace the forward ones, counted from the start:
+    :func:`best_prefix` with no margin, read from the start's end of ``judged (n, 2)`` (per
+    frame, nearest the settled frame first, backward then forward energy). The two tracks
+    can differ only near the start; next to the settled frame they hold the same pose and
+    score alike, so the taken frames are those from the start up to where the backward
+    track stopped doing better."""
+    return best_prefix(np.asarray(judged, dtype=np.float64).reshape(-1, 2)[::-1], 0.0)
 
 
 def gave_up(judged, margin: float, frames: int) -> bool:

@@ -129,13 +129,16 @@ class EnergySettings:
     damping : float
         Velocity damping of the prediction (1 = constant velocity).
     prior_huber : float
-        0 (default): the motion prior's Gaussian penalty. Above 0: Huber's loss at that many
+        0: the motion prior's Gaussian penalty. Above 0: Huber's loss at that many
         standard deviations (:class:`~depthtrack.motion.prior.ConstantVelocityPrior`,
         ``huber``): a change of velocity beyond it costs linearly, not quadratically. 3 on
         dev at the default of 2026-11-30: +1.9 points over 42 tracks, but one lost 5.5, so
         not the default (README, "A kick's accelerations, again"); on top of the hidden
         re-seat +0.7 over the 42 and +2.5 over the 27 off-front parity tracks, one dev
-        track lost 6.0, still not ("A kick's accelerations, a third time").
+        track lost 6.0, still not ("A kick's accelerations, a third time"). That loss was
+        a start handed on wrong in one arm, which :attr:`HeadingSettings.retro_settle`
+        re-tracks: 3 by default since 2026-11-30 with ``retro_settle`` 12 (dev 42 +1.65,
+        none lost more than 5, off-front parity +3.0; README, "The frames back to a start").
     likelihood_weight : float
         ``w`` of the energy.
     pose_prior_std : float
@@ -152,7 +155,7 @@ class EnergySettings:
     """
 
     damping: float = 0.7
-    prior_huber: float = 0.0
+    prior_huber: float = 3.0
     likelihood_weight: float = 1.0
     pose_prior_std: float = 1.0
     twist_std: float = 0.3
