@@ -363,10 +363,9 @@ class HeadingSettings:
     ``retro_settle``: that many frames after a start (automatic, after its front/back check,
     or handed on by the shape fit; 0 = off; 12 by default since 2026-11-30, with
     :attr:`~.settings.EnergySettings.prior_huber` 3: dev 42 paired +1.65 points, none lost
-    more than 5, off-front parity +3.0; README, "The frames back to a start"), with no
-    correction on that frame, the frames
-    back to the start (or to the last correction re-tracked since) are tracked again
-    backwards from the track's pose (``retracks`` kind ``"settle"``): a start wrong in one
+    more than 5, off-front parity +3.0; README, "The frames back to a start"), when that
+    frame made no correction, the frames back to the start (or to the last correction
+    re-tracked since) are tracked again backwards from the track's pose (``retracks`` kind ``"settle"``): a start wrong in one
     limb that the track finds by itself a few frames later has no correction to re-track
     from. It runs back to the start whether or not the two tracks agree on the way (they
     agree next to the frame the track settled on and may differ only near the start), and
@@ -433,8 +432,8 @@ class HeadingSettings:
                   "evidence_drift", "evidence_threshold", "search_every", "search_margin", "energy_margin",
                   "limb_every", "limb_margin", "refit_level", "twin_climbs", "reseat_every",
                   "reseat_margin", "reseat_free", "reseat_free_pixels", "reseat_free_gap",
-                  "reseat_free_every", "reseat_hidden", "retro_frames", "retro_margin", "retro_give_up", "retro_settle",
-                  "polish_within", allow_zero=True)
+                  "reseat_free_every", "reseat_hidden", "retro_frames", "retro_margin", "retro_give_up",
+                  "retro_settle", "polish_within", allow_zero=True)
         _positive(self, "votes", "twin_passes", "reseat_climbs")
         _power_of_two(self.recheck_tile, "HeadingSettings.recheck_tile", zero_ok=True)
         _power_of_two(self.judge_tile, "HeadingSettings.judge_tile", zero_ok=True)

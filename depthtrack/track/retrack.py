@@ -33,8 +33,7 @@ RETRO_OFF = {"heading": _HEADING_OFF,
 RETRO_AGREE_M = 0.05
 
 #: ``stopped`` of a re-track entry where the forward track had the correction already.
-STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "agrees",
-               "settle": "agrees"}
+STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "agrees"}
 
 
 def reach_after(lowest: dict, kind: str, at: int, stop: str) -> dict:
@@ -102,9 +101,10 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
     exceeds the forward poses' on the same frames by more than the fraction
-    ``retro_margin`` (after a start, ``kind`` ``"settle"``: by anything at all, no margin:
-    nothing was corrected, so the backward track has only its energy to go by). The correction is the evidence: frames before it where one heading
-    (or one side for the limbs) explained the image clearly better would have been corrected
+    ``retro_margin`` (after a start, ``kind`` ``"settle"``, the frames from the start on
+    where the backward track did better, with no margin, :func:`settled_frames`: nothing was
+    corrected, so it has only its energy to go by). The correction is the evidence: frames
+    before it where one heading (or one side for the limbs) explained the image clearly better would have been corrected
     sooner, so there the two score alike, and the backward track's continuity with the
     corrected pose is what tells them apart; the margin only refuses a backward track that
     lost the person. Either way ``tracker.state.retracks`` gets an entry.
@@ -118,7 +118,6 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     """
     settings = tracker.settings
     h = settings.heading
-    margin = 0.0 if kind == "settle" else h.retro_margin
     # after a start the frames next to the settled pose score alike, noise either way: no
     # giving up on them before the backward track reaches the start
     give_up = 0 if kind == "settle" else h.retro_give_up
@@ -149,7 +148,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             indices.append(index)
             backward.append(state.log[-1]["cost"])
             judged.append(tracker.judge_energy()(np.stack([x, forward])))   # this frame's
-            if gave_up(judged, margin, give_up):
+            if gave_up(judged, h.retro_margin, give_up):
                 stopped = "worse"
                 break
     entry = {"kind": kind, "index": at, "frames": len(indices),
@@ -159,7 +158,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         e_back, e_forward = np.mean(judged, axis=0)
         better = best_prefix(judged, 0.0)
         # (a track given up on scores above the margin over the frames it reached)
-        n = (len(indices) if e_back <= e_forward * (1.0 + margin) else
+        n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              better if h.retro_take == "prefix" else 0)
         if kind == "settle":
             n = settled_frames(judged)
