@@ -365,9 +365,9 @@ class HeadingSettings:
     :attr:`~.settings.EnergySettings.prior_huber` 3: dev 42 paired +1.65 points, none lost
     more than 5, off-front parity +3.0; README, "The frames back to a start"), when that
     frame made no correction, the frames back to the start (or to the last correction
-    re-tracked since) are tracked again backwards from the track's pose (``retracks`` kind ``"settle"``): a start wrong in one
-    limb that the track finds by itself a few frames later has no correction to re-track
-    from. It runs back to the start whether or not the two tracks agree on the way (they
+    re-tracked since) are tracked again backwards from the track's pose (``retracks`` kind
+    ``"settle"``): a start wrong in one limb that the track finds by itself a few frames
+    later has no correction to re-track from. It runs back to the start whether or not the two tracks agree on the way (they
     agree next to the frame the track settled on and may differ only near the start), and
     its poses replace the forward ones only where they explain the frames better, with no
     margin (nothing was corrected to vouch for them). It reaches back at most

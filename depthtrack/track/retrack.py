@@ -104,8 +104,8 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     ``retro_margin`` (after a start, ``kind`` ``"settle"``, the frames from the start on
     where the backward track did better, with no margin, :func:`settled_frames`: nothing was
     corrected, so it has only its energy to go by). The correction is the evidence: frames
-    before it where one heading (or one side for the limbs) explained the image clearly better would have been corrected
-    sooner, so there the two score alike, and the backward track's continuity with the
+    before it where one heading (or one side for the limbs) explained the image clearly
+    better would have been corrected sooner, so there the two score alike, and the backward track's continuity with the
     corrected pose is what tells them apart; the margin only refuses a backward track that
     lost the person. Either way ``tracker.state.retracks`` gets an entry.
     The tracker's state is the corrected forward state again afterwards: the forward track
@@ -158,17 +158,18 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         e_back, e_forward = np.mean(judged, axis=0)
         better = best_prefix(judged, 0.0)
         # (a track given up on scores above the margin over the frames it reached)
-        n = (len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
+        n = (settled_frames(judged) if kind == "settle" else
+             len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
              better if h.retro_take == "prefix" else 0)
-        if kind == "settle":
-            n = settled_frames(judged)
         rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
                 settings.judge.look_revoke if was_look(corrected, kind) else "never")
         revoke = revokes(rule, n, better, len(indices), outscored=e_back > e_forward,
                          met=stopped == STOP_LABELS["heading"])
         n = 0 if revoke else n
-        # frames taken, newest first: from the correction back, or (settle) the oldest
-        taken = indices[len(indices) - n:] if kind == "settle" else indices[:n]
+        # the frames taken (indices run newest first): from the correction back, or, after a
+        # start, the oldest
+        chosen = slice(len(indices) - n, None) if kind == "settle" else slice(0, n)
+        taken = indices[chosen]
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
                      energy_backward=round(float(e_back), 1),
@@ -176,9 +177,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
                      share_backward=round(float(np.mean(backward)), 4),
                      frames_taken=n, **({"first_taken": taken[-1], "last_taken": taken[0]}
                                         if n else {}))
-        for index, x in zip(indices, poses):
-            if index not in taken:
-                continue
+        for index, x in zip(taken, poses[chosen]):
             held[where[index]] = (index, x)
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
     return revoke
