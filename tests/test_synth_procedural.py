@@ -26,7 +26,7 @@ def test_spins_turn_in_place_at_their_speeds(body):
 
 def test_benchmark_motions_rest_on_the_floor(body):
     rest = np.asarray(body.posed_vertices(np.zeros((1, body.dof))))[0, :, 1].max()
-    for name in ("bend", "squat-deep", "lie-down", "overhead", "sidestep", "walk-back"):
+    for name in ("bend", "squat-deep", "lie-down", "lie-front", "overhead", "sidestep", "walk-back"):
         poses = procedural_motion(name, body, 10.0)
         assert np.all(np.isfinite(poses))
         assert np.abs(np.diff(poses, axis=0)[:, 3:]).max() < 0.5            # smooth at 10 fps
@@ -36,6 +36,13 @@ def test_benchmark_motions_rest_on_the_floor(body):
         if name == "lie-down":          # lying flat: the head near the floor (y down), halfway through
             mid = joints[len(joints) // 2]
             assert rest - mid[C["head"], 1] < 0.3 and rest - joints[0, C["head"], 1] > 1.4
+        if name == "lie-front":         # lying flat on the front, the wrists past the head
+            mid = joints[len(joints) // 2]
+            assert rest - mid[C["head"], 1] < 0.3 and rest - mid[C["pelvis"], 1] < 0.3
+            from depthtrack.track.heading import facing_direction
+            assert facing_direction(poses[len(poses) // 2])[1] > 0.95          # face down (y down)
+            axis = mid[C["head"]] - mid[C["pelvis"]]
+            assert (mid[C["l_wrist"]] - mid[C["pelvis"]]) @ axis > axis @ axis   # beyond the head
         if name == "sidestep":          # to the subject's left (+x) and back
             assert joints[:, C["pelvis"], 0].max() > 1.0 and abs(joints[-1, C["pelvis"], 0]) < 0.1
         if name == "walk-back":         # away from where it faces (it faces -z)

@@ -19,6 +19,8 @@ lowest point of the body every frame (so a body lying down rests on the floor):
 * ``bend``       -- bending over at the hips to a flat back and up again, twice;
 * ``squat-deep`` -- two deep squats with the arms held overhead;
 * ``lie-down``   -- kneeling down, lying on the back, getting up again;
+* ``lie-front``  -- kneeling down, lying on the front with the arms stretched past the head,
+  getting up again;
 * ``overhead``   -- arms raised forward to overhead, a side bend each way, lowered;
 * ``sidestep``   -- walking sideways to the subject's left, then back;
 * ``walk-back``  -- walking backwards, away from where it faces.
@@ -32,7 +34,7 @@ tune settings; test -- report only.
 
 ==========  =====================================================
 train       wave, squat, turn, mixed, spin-slow
-dev         spin-fast, bend, overhead, walk-back, cartwheel
+dev         spin-fast, bend, overhead, walk-back, cartwheel, lie-front
 test        spin, squat-deep, lie-down, sidestep
 ==========  =====================================================
 """
@@ -43,13 +45,13 @@ import numpy as np
 #: Names accepted by :func:`procedural_motion`, with their default durations (s).
 PROCEDURAL_MOTIONS = {"wave": 4.0, "squat": 4.0, "turn": 4.0, "mixed": 8.0,
                       "spin-slow": 4.0, "spin": 4.0, "spin-fast": 3.0, "bend": 6.0, "squat-deep": 5.0,
-                      "lie-down": 10.0, "overhead": 6.0, "sidestep": 6.0, "walk-back": 5.0,
+                      "lie-down": 10.0, "lie-front": 10.0, "overhead": 6.0, "sidestep": 6.0, "walk-back": 5.0,
                       "cartwheel": 6.0}
 
 #: Train / dev / test assignment of the procedural motions (see the module docstring).
 PROCEDURAL_SPLIT = {
     "train": ["wave", "squat", "turn", "mixed", "spin-slow"],
-    "dev": ["spin-fast", "bend", "overhead", "walk-back", "cartwheel"],
+    "dev": ["spin-fast", "bend", "overhead", "walk-back", "cartwheel", "lie-front"],
     "test": ["spin", "squat-deep", "lie-down", "sidestep"],
 }
 
@@ -173,6 +175,21 @@ def _lie_down(P, t, T):
     P.add("r_shoulder_rz", np.radians(20) * down)
 
 
+def _lie_front(P, t, T):
+    # 0-15 % stand, 15-40 % kneel and go down onto the front, 40-60 % lie, the arms stretched
+    # past the head, 60-85 % get up, stand. Dev's lying body (lie-down, on the back, is test).
+    down = _smooth((t / T - 0.15) / 0.25) * _smooth((0.85 - t / T) / 0.25)   # 0 standing, 1 lying
+    knees = np.sin(np.pi * down)                                       # kneeling on the way
+    P.add("pelvis_rx", np.radians(90) * down)                          # on the front, face down
+    P.add("l_hip_rx", -np.radians(80) * knees)
+    P.add("r_hip_rx", -np.radians(80) * knees)
+    P.add("l_knee_rx", np.radians(100) * knees)
+    P.add("r_knee_rx", np.radians(100) * knees)
+    reach = np.radians(60) * knees + np.radians(170) * down ** 3      # to the floor, then past the head
+    P.add("l_shoulder_rx", -reach)
+    P.add("r_shoulder_rx", -reach)
+
+
 def _overhead(P, t, T):
     up = _smooth(t / 1.2) * _smooth((T - t) / 1.2)
     P.add("l_shoulder_rx", -np.radians(170) * up)
@@ -237,7 +254,8 @@ _BENCHMARK_MOTIONS = {
     "spin-slow": lambda P, t, T: _spin(P, t, T, 1.0, 4.0),
     "spin": lambda P, t, T: _spin(P, t, T, 2.0, 2.0),
     "spin-fast": lambda P, t, T: _spin(P, t, T, 3.0, 1.0),
-    "bend": _bend, "squat-deep": _squat_deep, "lie-down": _lie_down, "overhead": _overhead,
+    "bend": _bend, "squat-deep": _squat_deep, "lie-down": _lie_down, "lie-front": _lie_front,
+    "overhead": _overhead,
     "sidestep": lambda P, t, T: _walk(P, t, T, "left"),
     "walk-back": lambda P, t, T: _walk(P, t, T, "back"),
     "cartwheel": _cartwheel,
