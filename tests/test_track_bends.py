@@ -119,3 +119,33 @@ def test_an_upright_start_keeps_the_gate_shut(tmp_path, capsys):
     assert line["hip_angle"] == gate["hip_angle"]
     assert tool.main([str(tmp_path / "missing")]) == 2
     assert "missing" in capsys.readouterr().err
+
+
+
+def test_a_recovery_searches_the_bent_bodies_behind_the_gate(tmp_path):
+    """Standing on frame 0, folded over in a down dog on frame 1: the track is lost, and with
+    ``bends`` "always" (the default) the recovery's search also tries the bent bodies -- its
+    straight best leaves more than ``bend_gate`` unexplained -- which "start" leaves to the
+    automatic start. (Which pose wins is the search's score: the recovery prefers the last
+    heading and body axis, so here it keeps the straight fit either way.)"""
+    from depthtrack.io import open_sequence
+    from depthtrack.synth.generate import synthesize
+    from depthtrack.synth.procedural import ground_lock
+
+    body = BodyModel.default(height=1.75, mesh="full")
+    poses = np.concatenate([ground_lock(body, np.zeros((1, body.dof))), _down_dog(body)[:1]])
+    synthesize(tmp_path / "seq", body, poses, fps=25.0, camera="sr4000", azimuth=90.0,
+               noise="tof", seed=1)
+    seq = open_sequence(tmp_path / "seq")
+    assert TrackerSettings().start.bends == "always"
+    counts = {}
+    for bends in ("start", "always"):
+        settings = TrackerSettings().updated({"start": {"bends": bends}})
+        with Tracker(BodyModel.default(height=1.75), seq.camera, settings=settings) as tracker:
+            tracker.init(seq.depth(0))
+            after_start = dict(tracker.counts)
+            tracker.step(seq.depth(1))
+            counts[bends] = tracker.counts["candidates"] - after_start["candidates"]
+            assert tracker.counts["recoveries_tried"] - after_start.get("recoveries_tried", 0) == 1
+    # the bent grid is twice the straight one (a pike and a seated body)
+    assert counts["always"] > 1.4 * counts["start"], counts
