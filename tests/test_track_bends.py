@@ -121,7 +121,6 @@ def test_an_upright_start_keeps_the_gate_shut(tmp_path, capsys):
     assert "missing" in capsys.readouterr().err
 
 
-
 def test_a_recovery_searches_the_bent_bodies_behind_the_gate(tmp_path):
     """Standing on frame 0, folded over in a down dog on frame 1: the track is lost, and with
     ``bends`` "always" (the default) the recovery's search also tries the bent bodies -- its
@@ -146,6 +145,7 @@ def test_a_recovery_searches_the_bent_bodies_behind_the_gate(tmp_path):
             after_start = dict(tracker.counts)
             tracker.step(seq.depth(1))
             counts[bends] = tracker.counts["candidates"] - after_start["candidates"]
+            assert tracker.frame_log[-1]["lost"] and tracker.frame_log[-1]["recovered"]
             assert tracker.counts["recoveries_tried"] - after_start.get("recoveries_tried", 0) == 1
     # the bent grid is twice the straight one (a pike and a seated body)
     assert counts["always"] > 1.4 * counts["start"], counts

@@ -45,8 +45,8 @@ import numpy as np
 #: Names accepted by :func:`procedural_motion`, with their default durations (s).
 PROCEDURAL_MOTIONS = {"wave": 4.0, "squat": 4.0, "turn": 4.0, "mixed": 8.0,
                       "spin-slow": 4.0, "spin": 4.0, "spin-fast": 3.0, "bend": 6.0, "squat-deep": 5.0,
-                      "lie-down": 10.0, "lie-front": 10.0, "overhead": 6.0, "sidestep": 6.0, "walk-back": 5.0,
-                      "cartwheel": 6.0}
+                      "lie-down": 10.0, "lie-front": 10.0, "overhead": 6.0, "sidestep": 6.0,
+                      "walk-back": 5.0, "cartwheel": 6.0}
 
 #: Train / dev / test assignment of the procedural motions (see the module docstring).
 PROCEDURAL_SPLIT = {
