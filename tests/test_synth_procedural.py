@@ -5,6 +5,7 @@ import pytest
 from depthtrack.body import BodyModel
 from depthtrack.contract import JOINT_INDEX as C
 from depthtrack.synth.procedural import PROCEDURAL_MOTIONS, PROCEDURAL_SPLIT, procedural_motion
+from depthtrack.track.heading import facing_direction
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +40,6 @@ def test_benchmark_motions_rest_on_the_floor(body):
         if name == "lie-front":         # lying flat on the front, the wrists past the head
             mid = joints[len(joints) // 2]
             assert rest - mid[C["head"], 1] < 0.3 and rest - mid[C["pelvis"], 1] < 0.3
-            from depthtrack.track.heading import facing_direction
             assert facing_direction(poses[len(poses) // 2])[1] > 0.95          # face down (y down)
             axis = mid[C["head"]] - mid[C["pelvis"]]
             assert (mid[C["l_wrist"]] - mid[C["pelvis"]]) @ axis > axis @ axis   # beyond the head

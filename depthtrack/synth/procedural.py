@@ -159,10 +159,17 @@ def _squat_deep(P, t, T):
     P.add("r_shoulder_rx", -np.radians(165) * up)
 
 
+def _lying(t, T):
+    """The lying motions' phases: ``(down, knees)``, each ``(F,)``. ``down`` is 0 standing
+    and 1 lying: 0-15 % stand, 15-40 % go down, 40-60 % lie, 60-85 % get up, stand;
+    ``knees`` peaks on the way down and up, and is 0 standing and lying."""
+    down = _smooth((t / T - 0.15) / 0.25) * _smooth((0.85 - t / T) / 0.25)
+    return down, np.sin(np.pi * down)
+
+
 def _lie_down(P, t, T):
-    # 0-15 % stand, 15-40 % down onto the back, 40-60 % lie, 60-85 % get up, stand.
-    down = _smooth((t / T - 0.15) / 0.25) * _smooth((0.85 - t / T) / 0.25)   # 0 standing, 1 lying
-    knees = np.sin(np.pi * down)                                       # bent on the way, straight lying
+    # down onto the back, the knees bent on the way and straight lying
+    down, knees = _lying(t, T)
     P.add("pelvis_rx", -np.radians(90) * down)                         # on the back, face up
     P.add("l_hip_rx", -np.radians(100) * knees)
     P.add("r_hip_rx", -np.radians(100) * knees)
@@ -176,10 +183,9 @@ def _lie_down(P, t, T):
 
 
 def _lie_front(P, t, T):
-    # 0-15 % stand, 15-40 % kneel and go down onto the front, 40-60 % lie, the arms stretched
-    # past the head, 60-85 % get up, stand. Dev's lying body (lie-down, on the back, is test).
-    down = _smooth((t / T - 0.15) / 0.25) * _smooth((0.85 - t / T) / 0.25)   # 0 standing, 1 lying
-    knees = np.sin(np.pi * down)                                       # kneeling on the way
+    # kneel and go down onto the front, lie with the arms stretched past the head, get up.
+    # Dev's lying body (lie-down, on the back, is test).
+    down, knees = _lying(t, T)
     P.add("pelvis_rx", np.radians(90) * down)                          # on the front, face down
     P.add("l_hip_rx", -np.radians(80) * knees)
     P.add("r_hip_rx", -np.radians(80) * knees)
