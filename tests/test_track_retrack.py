@@ -138,6 +138,12 @@ def test_a_heading_switch_tracks_back_past_a_limb_swap_or_a_recovery_by_rank():
     after_turn = reach_after(after_found, "heading", 30, "rank")
     assert after_turn == dict.fromkeys(CORRECTION_ORDER, 31)
     assert reach_after(after_turn, "limbs", 40, "rank")["heading"] == 31
+    # "own": a correction bars only re-tracks of its own kind, so a limb swap's re-track
+    # goes on past a heading switch (which carried back the legs the swap finds wrong)
+    after_turn_own = reach_after(start, "heading", 30, "own")
+    assert after_turn_own == {"heading": 31, "recovery": 3, "limbs": 3}
+    after_both = reach_after(after_turn_own, "limbs", 40, "own")
+    assert after_both == {"heading": 31, "recovery": 3, "limbs": 41}
     # the default (since 2026-11-29): a recovery's re-track goes on past a limb swap the
     # lost track made (a cartwheel followed 180 degrees out of phase, then found again)
     default = TrackerSettings().heading.retro_stop

@@ -39,11 +39,18 @@ STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "ag
 def reach_after(lowest: dict, kind: str, at: int, stop: str) -> dict:
     """``{kind: first frame}`` a later re-track of each kind (:data:`CORRECTION_ORDER`) may
     reach once the frames before a correction of ``kind`` on frame ``at`` were re-tracked:
-    past ``at`` for every kind (``stop`` ``"any"``) or for ``kind`` and the kinds after it in
-    the order (``"rank"``; :attr:`HeadingSettings.retro_stop`), the others as they were."""
+    past ``at`` for every kind (``stop`` ``"any"``), for ``kind`` and the kinds after it in
+    the order (``"rank"``), or for ``kind`` alone (``"own"``;
+    :attr:`HeadingSettings.retro_stop`), the others as they were."""
     rank = CORRECTION_ORDER.index(kind)
-    return {k: at + 1 if stop == "any" or CORRECTION_ORDER.index(k) >= rank else first
-            for k, first in lowest.items()}
+
+    def stops(k):
+        if stop == "any":
+            return True
+        if stop == "own":
+            return k == kind
+        return CORRECTION_ORDER.index(k) >= rank
+    return {k: at + 1 if stops(k) else first for k, first in lowest.items()}
 
 
 def _corrections(state) -> dict:
