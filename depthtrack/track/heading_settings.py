@@ -319,8 +319,11 @@ class HeadingSettings:
     wrong), a recovery's past a limb swap; a limb swap's stops at any. ``"own"``: only one
     of its own kind: a limb swap's backward track goes on past a heading switch or a
     recovery too (their backward tracks carried back the limbs the swap now says were on
-    the wrong sides), a recovery's past a heading switch. Where it goes on, the
-    energy rule judges the frames past the earlier correction as any others. ``"rank"`` is
+    the wrong sides), a recovery's past a heading switch; a re-track that went past one is
+    taken whole only where its energy is at most the forward poses' (no ``retro_margin``:
+    those frames had a correction's evidence already), else by ``retro_take``, and its entry
+    in ``retracks`` says ``past_correction``. Elsewhere, the energy rule judges the frames
+    past the earlier correction as any others. ``"rank"`` is
     the default since 2026-11-29 (``"any"`` before): a recovery found by the recogniser's
     proposals after the track had followed a cartwheel 180 degrees out of phase (an
     upside-down star explains the silhouette as well as an upright one with the arms raised)

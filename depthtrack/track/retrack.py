@@ -85,7 +85,7 @@ def _forward_agrees(kind, detail, backward, forward) -> bool:
 
 
 def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
-                              kind: str = "heading") -> bool:
+                              kind: str = "heading", guard: int | None = None) -> bool:
     """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``at``: the
     frames before it tracked again backwards from the corrected pose
     (:attr:`HeadingSettings.retro_frames`, ``retro_after``). Or, ``kind`` ``"settle"``,
@@ -108,7 +108,9 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
     exceeds the forward poses' on the same frames by more than the fraction
-    ``retro_margin`` (after a start, ``kind`` ``"settle"``, the frames from the start on
+    ``retro_margin`` (with no margin where the backward track went on below ``guard``, past
+    an earlier correction of another kind, :attr:`HeadingSettings.retro_stop` ``"own"``: those
+    frames had a correction's evidence already; after a start, ``kind`` ``"settle"``, the frames from the start on
     where the backward track did better, with no margin, :func:`settled_frames`: nothing was
     corrected, so it has only its energy to go by). The correction is the evidence: frames
     before it where one heading (or one side for the limbs) explained the image clearly
@@ -164,9 +166,12 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)
         better = best_prefix(judged, 0.0)
+        # past an earlier correction of another kind, the backward track must do better
+        crossed = guard is not None and indices[-1] < guard
+        margin = 0.0 if crossed else h.retro_margin
         # (a track given up on scores above the margin over the frames it reached)
         n = (settled_frames(judged) if kind == "settle" else
-             len(indices) if e_back <= e_forward * (1.0 + h.retro_margin) else
+             len(indices) if e_back <= e_forward * (1.0 + margin) else
              better if h.retro_take == "prefix" else 0)
         rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
                 settings.judge.look_revoke if was_look(corrected, kind) else "never")
@@ -177,6 +182,8 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         # start, the oldest
         chosen = slice(len(indices) - n, None) if kind == "settle" else slice(0, n)
         taken = indices[chosen]
+        if crossed:
+            entry["past_correction"] = True
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
                      energy_backward=round(float(e_back), 1),
