@@ -80,6 +80,21 @@ def test_a_backward_track_gives_the_frames_up_to_where_it_stopped_doing_as_well(
         TrackerSettings(heading={"retro_take": "some"})
 
 
+def test_past_an_earlier_correction_a_backward_track_is_taken_only_if_it_does_better():
+    from depthtrack.track.retrack import frames_to_take
+    # 05_20 seed 2's shape: better next to the correction, worse further back, 3.5 % above
+    # the forward poses over all twelve frames
+    judged = [[0.9, 1.0]] * 6 + [[1.17, 1.0]] * 6
+    assert np.sum(np.asarray(judged)[:, 0]) == pytest.approx(12.42)
+    assert frames_to_take(judged, "limbs", 0.05, "prefix") == 12     # within the margin
+    assert frames_to_take(judged, "limbs", 0.0, "prefix") == 6       # no margin: the prefix
+    assert frames_to_take(judged, "limbs", 0.0, "all") == 0
+    assert frames_to_take([[0.9, 1.0]] * 12, "limbs", 0.0, "prefix") == 12
+    # after a start the oldest frames where the backward track did better, margin or not
+    settle = [[1.0, 1.0]] * 4 + [[0.5, 1.0]] * 2
+    assert frames_to_take(settle, "settle", 0.05, "prefix") == 2
+
+
 def test_a_backward_track_is_given_up_once_it_scores_worse_frame_after_frame():
     from depthtrack.track.retrack import gave_up
     held, lost = [[1.0, 1.0]] * 3, [[2.0, 1.0]]

@@ -168,11 +168,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         better = best_prefix(judged, 0.0)
         # past an earlier correction of another kind, the backward track must do better
         crossed = guard is not None and indices[-1] < guard
-        margin = 0.0 if crossed else h.retro_margin
-        # (a track given up on scores above the margin over the frames it reached)
-        n = (settled_frames(judged) if kind == "settle" else
-             len(indices) if e_back <= e_forward * (1.0 + margin) else
-             better if h.retro_take == "prefix" else 0)
+        n = frames_to_take(judged, kind, 0.0 if crossed else h.retro_margin, h.retro_take)
         rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
                 settings.judge.look_revoke if was_look(corrected, kind) else "never")
         revoke = revokes(rule, n, better, len(indices), outscored=e_back > e_forward,
@@ -195,6 +191,24 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
             held[where[index]] = (index, x)
     tracker.state = corrected.replace(retracks=corrected.retracks + (entry,))
     return revoke
+
+
+def frames_to_take(judged, kind: str, margin: float, take: str) -> int:
+    """How many frames of a backward track replace the forward ones, before any revoke.
+
+    ``judged (n, 2)``: per frame, nearest the correction first, the backward and the forward
+    pose's energy. After a start (``kind`` ``"settle"``) :func:`settled_frames`; else all
+    ``n`` when the backward track's summed energy is at most the forward's times ``1 +
+    margin`` (:attr:`HeadingSettings.retro_margin`, 0 past an earlier correction of
+    another kind), or else, with ``take`` ``"prefix"`` (:attr:`HeadingSettings.retro_take`),
+    the :func:`best_prefix` with no margin (a track given up on scores above the margin
+    over the frames it reached), with ``"all"`` none."""
+    if kind == "settle":
+        return settled_frames(judged)
+    e_back, e_forward = np.sum(np.asarray(judged, dtype=np.float64).reshape(-1, 2), axis=0)
+    if e_back <= e_forward * (1.0 + margin):
+        return len(judged)
+    return best_prefix(judged, 0.0) if take == "prefix" else 0
 
 
 def was_look(state, kind: str = "recovery") -> bool:
