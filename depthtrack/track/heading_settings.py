@@ -24,7 +24,7 @@ RETRO_KINDS = ("heading", "limbs", "recovery")
 #: How much of a backward track :attr:`HeadingSettings.retro_take` may take.
 RETRO_TAKES = ("all", "prefix")
 #: Which earlier corrections a re-track stops at (:attr:`HeadingSettings.retro_stop`).
-RETRO_STOPS = ("any", "rank", "own")
+RETRO_STOPS = ("any", "rank")
 #: Which heading switches their re-track takes back (:attr:`HeadingSettings.retro_revoke`).
 RETRO_REVOKES = ("never", "refused", "unsupported", "outscored", "outscored_unless_met")
 #: Which judged leads are close calls (:attr:`HeadingSettings.polish_side`).
@@ -316,14 +316,8 @@ class HeadingSettings:
     :data:`.retrack.CORRECTION_ORDER` (heading, recovery, limbs): a heading switch's backward
     track goes on past a limb swap or a recovery (those corrected the limbs or found the
     person again, with the heading the forward track had, which the switch now says was
-    wrong), a recovery's past a limb swap; a limb swap's stops at any. ``"own"``: only one
-    of its own kind: a limb swap's backward track goes on past a heading switch or a
-    recovery too (their backward tracks carried back the limbs the swap now says were on
-    the wrong sides), a recovery's past a heading switch; a re-track that went past one is
-    taken whole only where its energy is at most the forward poses' (no ``retro_margin``:
-    those frames had a correction's evidence already), else by ``retro_take``, and its entry
-    in ``retracks`` says ``past_correction``. Elsewhere, the energy rule judges the frames
-    past the earlier correction as any others. ``"rank"`` is
+    wrong), a recovery's past a limb swap; a limb swap's stops at any. Where it goes on, the
+    energy rule judges the frames past the earlier correction as any others. ``"rank"`` is
     the default since 2026-11-29 (``"any"`` before): a recovery found by the recogniser's
     proposals after the track had followed a cartwheel 180 degrees out of phase (an
     upside-down star explains the silhouette as well as an upright one with the arms raised)

@@ -52,9 +52,6 @@ def stream_poses(tracker, frames, init_pose=None):
     recent = collections.deque(maxlen=max(retro, 1))   # (index, depth) a correction may re-track
     # the first frame each kind's re-track may reach: the start, or past an earlier correction
     lowest = dict.fromkeys(CORRECTION_ORDER, 0)
-    # the first frame each kind's re-track reaches without passing an earlier correction of
-    # another kind (retro_stop "own" goes past one, judged with no margin there)
-    guard = dict(lowest)
     # the frame whose pose the frames back to the last start are re-tracked from (-1: none)
     settle, settle_at = s.heading.retro_settle, -1
 
@@ -79,14 +76,12 @@ def stream_poses(tracker, frames, init_pose=None):
             kind = new_correction(before, tracker.state, s.heading.retro_after) if retro else None
             if kind is not None and tracker.state.pose is not None:
                 look = was_look(tracker.state, kind)
-                revoked = (retrack_before_correction(tracker, held, recent, lowest[kind], i, kind,
-                                                     guard=guard[kind])
+                revoked = (retrack_before_correction(tracker, held, recent, lowest[kind], i, kind)
                            and revoke_switch(tracker, held, before, depth, i, kind))
                 # a look's re-track sets no floor: a later correction's re-track, on its own
                 # evidence, may go back past it (JudgeSettings.look_every)
                 if not revoked and not look:
                     lowest = reach_after(lowest, kind, i, s.heading.retro_stop)
-                    guard = reach_after(guard, kind, i, "rank")
             elif i == settle_at and retro and tracker.state.pose is not None:
                 # back to the start, or to the last correction re-tracked since
                 retrack_before_correction(tracker, held, recent, max(lowest.values()), i, "settle")
@@ -108,7 +103,6 @@ def stream_poses(tracker, frames, init_pose=None):
                 recent.clear()
                 recent.append((i, depth))
                 lowest = dict.fromkeys(CORRECTION_ORDER, i)
-                guard = dict(lowest)
                 # no front/back check where the user said which way the person faces, unless
                 # the start is near profile (StartSettings.facing_margin)
                 clear = tracker.state.init_info.get("facing_clear") is True

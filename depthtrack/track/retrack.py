@@ -39,18 +39,11 @@ STOP_LABELS = {"heading": "same heading", "limbs": "same sides", "recovery": "ag
 def reach_after(lowest: dict, kind: str, at: int, stop: str) -> dict:
     """``{kind: first frame}`` a later re-track of each kind (:data:`CORRECTION_ORDER`) may
     reach once the frames before a correction of ``kind`` on frame ``at`` were re-tracked:
-    past ``at`` for every kind (``stop`` ``"any"``), for ``kind`` and the kinds after it in
-    the order (``"rank"``), or for ``kind`` alone (``"own"``;
-    :attr:`HeadingSettings.retro_stop`), the others as they were."""
+    past ``at`` for every kind (``stop`` ``"any"``) or for ``kind`` and the kinds after it in
+    the order (``"rank"``; :attr:`HeadingSettings.retro_stop`), the others as they were."""
     rank = CORRECTION_ORDER.index(kind)
-
-    def stops(k):
-        if stop == "any":
-            return True
-        if stop == "own":
-            return k == kind
-        return CORRECTION_ORDER.index(k) >= rank
-    return {k: at + 1 if stops(k) else first for k, first in lowest.items()}
+    return {k: at + 1 if stop == "any" or CORRECTION_ORDER.index(k) >= rank else first
+            for k, first in lowest.items()}
 
 
 def _corrections(state) -> dict:
@@ -85,7 +78,7 @@ def _forward_agrees(kind, detail, backward, forward) -> bool:
 
 
 def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
-                              kind: str = "heading", guard: int | None = None) -> bool:
+                              kind: str = "heading") -> bool:
     """After a correction of ``kind`` (:data:`CORRECTION_ORDER`) on frame ``at``: the
     frames before it tracked again backwards from the corrected pose
     (:attr:`HeadingSettings.retro_frames`, ``retro_after``). Or, ``kind`` ``"settle"``,
@@ -108,9 +101,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     Its poses replace those in ``held`` unless their energy without the motion prior on the
     recheck judge's tiles (:meth:`.tracker.Tracker.judge_energy`), summed over the frames,
     exceeds the forward poses' on the same frames by more than the fraction
-    ``retro_margin`` (with no margin where the backward track went on below ``guard``, past
-    an earlier correction of another kind, :attr:`HeadingSettings.retro_stop` ``"own"``: those
-    frames had a correction's evidence already; after a start, ``kind`` ``"settle"``, the frames from the start on
+    ``retro_margin`` (after a start, ``kind`` ``"settle"``, the frames from the start on
     where the backward track did better, with no margin, :func:`settled_frames`: nothing was
     corrected, so it has only its energy to go by). The correction is the evidence: frames
     before it where one heading (or one side for the limbs) explained the image clearly
@@ -166,9 +157,7 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
     if indices:
         e_back, e_forward = np.mean(judged, axis=0)
         better = best_prefix(judged, 0.0)
-        # past an earlier correction of another kind, the backward track must do better
-        crossed = guard is not None and indices[-1] < guard
-        n = frames_to_take(judged, kind, 0.0 if crossed else h.retro_margin, h.retro_take)
+        n = frames_to_take(judged, kind, h.retro_margin, h.retro_take)
         rule = (revoke_rule(h, corrected.heading_switches[-1]) if kind == "heading" else
                 settings.judge.look_revoke if was_look(corrected, kind) else "never")
         revoke = revokes(rule, n, better, len(indices), outscored=e_back > e_forward,
@@ -178,8 +167,6 @@ def retrack_before_correction(tracker, held, recent, lowest: int, at: int,
         # start, the oldest
         chosen = slice(len(indices) - n, None) if kind == "settle" else slice(0, n)
         taken = indices[chosen]
-        if crossed:
-            entry["past_correction"] = True
         entry.update(first=indices[-1], last=indices[0], taken=n > 0, frames_better=better,
                      energy_forward=round(float(e_forward), 1),
                      energy_backward=round(float(e_back), 1),
@@ -198,14 +185,14 @@ def frames_to_take(judged, kind: str, margin: float, take: str) -> int:
 
     ``judged (n, 2)``: per frame, nearest the correction first, the backward and the forward
     pose's energy. After a start (``kind`` ``"settle"``) :func:`settled_frames`; else all
-    ``n`` when the backward track's summed energy is at most the forward's times ``1 +
-    margin`` (:attr:`HeadingSettings.retro_margin`, 0 past an earlier correction of
-    another kind), or else, with ``take`` ``"prefix"`` (:attr:`HeadingSettings.retro_take`),
-    the :func:`best_prefix` with no margin (a track given up on scores above the margin
-    over the frames it reached), with ``"all"`` none."""
+    ``n`` when the backward track's energy (mean over the frames) is at most the forward's
+    times ``1 + margin`` (:attr:`HeadingSettings.retro_margin`), or else, with ``take``
+    ``"prefix"`` (:attr:`HeadingSettings.retro_take`), the :func:`best_prefix` with no margin
+    (a track given up on scores above the margin over the frames it reached), with
+    ``"all"`` none."""
     if kind == "settle":
         return settled_frames(judged)
-    e_back, e_forward = np.sum(np.asarray(judged, dtype=np.float64).reshape(-1, 2), axis=0)
+    e_back, e_forward = np.mean(np.asarray(judged).reshape(-1, 2), axis=0)
     if e_back <= e_forward * (1.0 + margin):
         return len(judged)
     return best_prefix(judged, 0.0) if take == "prefix" else 0
