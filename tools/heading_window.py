@@ -48,7 +48,8 @@ def hypotheses(path, frames: int):
                 if x is None:
                     break
                 err = np.linalg.norm(np.asarray(body.joint_positions(x)) - seq.joints[k], axis=1)
-                rows.append((s.log[-1]["cost"], energy, np.mean(err < 0.1)))
+                # energy: the frame's scores (Tracker._advance); the check's is "energy"
+                rows.append((s.log[-1]["cost"], energy["energy"], np.mean(err < 0.1)))
             out[kind] = np.array(rows).reshape(-1, 3).T
     return out
 
