@@ -186,7 +186,9 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         ``trial_limb_swaps``, ``trial_reaches``, ``trial_reseats`` (the trial's corrections,
         entries as in ``summary.json``'s lists of the same names), ``frames_used``, ``seconds`` (tracking and
         fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
-        a pose, ``start_pose``: its pose (48 floats) refined with the fitted body, and
+        a pose, ``start_pose``: the pose (48 floats) of the frame the trial's start took
+        (``start_frame``: 0, or later where the start was deferred, :func:`start_frame`)
+        refined with the fitted body, and
         ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
         the front/back check).
     """
@@ -239,6 +241,12 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
                     seconds=round(time.perf_counter() - t0, 2))
         return body, info
     pick = np.unique(np.linspace(0, len(tracked) - 1, s.fit_frames).round().astype(int))
+    # a start deferred until more of the person was in view (StartSettings.complete_fraction)
+    # took, and checked front/back on, a later frame than the first: the track starts from
+    # that frame's pose, not from the first frame's, which was only tracked back from it
+    first = start_frame(tracked, start)
+    if first:
+        pick = np.unique(np.r_[first, pick[pick > first]])
     index = [tracked[k][0] for k in pick]
     poses = np.array([tracked[k][1] for k in pick])
     fgs = [segmenter(depths[i], camera) for i in index]
@@ -252,10 +260,23 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
                     fit_scale=fit_scale, log=log)
     info.update(fitted=True, frames_used=index, **fit.to_dict())
     info.update(fit_seconds=info.pop("seconds"), seconds=round(time.perf_counter() - t0, 2))
-    if index[0] == 0:
-        # the first frame's pose, refined with the fitted body: the re-track starts from it
+    if tracked[0][0] == 0:
+        # the start frame's pose, refined with the fitted body: the re-track starts from it
         # and so keeps the trial's front/back decision (re-deciding it with a body a few
         # millimetres different flipped whole tracks on near-ties; README "Body shape")
         info["start_pose"] = fit.poses[0].tolist()
+        info["start_frame"] = int(index[0])
         info["start_info"] = start
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info
+
+
+def start_frame(tracked, start_info: dict) -> int:
+    """The frame a trial track's automatic start took: the first frame with a pose, or,
+    where the start was deferred (``deferred_frames`` in ``start_info``, its ``init_info``),
+    that many frames later, when those frames have poses too (they were tracked back from
+    it). ``tracked``: ``[(index, pose), ...]`` of the frames with a pose, in order. Returns
+    the position in ``tracked`` (0 when the start is its first frame)."""
+    deferred = int(start_info.get("deferred_frames", 0) or 0)
+    if deferred <= 0 or deferred >= len(tracked):
+        return 0
+    return deferred if tracked[deferred][0] == tracked[0][0] + deferred else 0
