@@ -187,8 +187,8 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         entries as in ``summary.json``'s lists of the same names), ``frames_used``, ``seconds`` (tracking and
         fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
         a pose, ``start_pose``: the pose (48 floats) of the frame the trial's start took
-        (``start_frame``: 0, or later where the start was deferred, :func:`start_frame`)
-        refined with the fitted body, and
+        (``start_frame``: 0, or later where the start was deferred, :func:`start_frame`),
+        refined with the fitted body where the fit used that frame, and
         ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
         the front/back check).
     """
@@ -241,12 +241,6 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
                     seconds=round(time.perf_counter() - t0, 2))
         return body, info
     pick = np.unique(np.linspace(0, len(tracked) - 1, s.fit_frames).round().astype(int))
-    # a start deferred until more of the person was in view (StartSettings.complete_fraction)
-    # took, and checked front/back on, a later frame than the first: the track starts from
-    # that frame's pose, not from the first frame's, which was only tracked back from it
-    first = start_frame(tracked, start)
-    if first:
-        pick = np.unique(np.r_[first, pick[pick > first]])
     index = [tracked[k][0] for k in pick]
     poses = np.array([tracked[k][1] for k in pick])
     fgs = [segmenter(depths[i], camera) for i in index]
@@ -261,11 +255,16 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     info.update(fitted=True, frames_used=index, **fit.to_dict())
     info.update(fit_seconds=info.pop("seconds"), seconds=round(time.perf_counter() - t0, 2))
     if tracked[0][0] == 0:
-        # the start frame's pose, refined with the fitted body: the re-track starts from it
-        # and so keeps the trial's front/back decision (re-deciding it with a body a few
-        # millimetres different flipped whole tracks on near-ties; README "Body shape")
-        info["start_pose"] = fit.poses[0].tolist()
-        info["start_frame"] = int(index[0])
+        # the start frame's pose, refined with the fitted body where the fit used that frame:
+        # the re-track starts from it and so keeps the trial's front/back decision
+        # (re-deciding it with a body a few millimetres different flipped whole tracks on
+        # near-ties; README "Body shape"). A start deferred until more of the person was in
+        # view (StartSettings.complete_fraction) took, and checked front/back on, a later
+        # frame than the first, whose pose was only tracked back from it
+        first = start_frame(tracked, start)
+        refined = dict(zip(pick.tolist(), fit.poses))
+        info["start_pose"] = np.asarray(refined.get(first, tracked[first][1])).tolist()
+        info["start_frame"] = int(tracked[first][0])
         info["start_info"] = start
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info
 
