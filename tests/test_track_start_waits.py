@@ -63,7 +63,8 @@ def test_a_given_start_on_a_later_frame_tracks_the_frames_before_it_backwards(sq
     (``init_frame``): the frames before it are tracked back from that pose, not started
     from the first frame's (a tracked-back pose, unchecked: dev 02_03 from 120 degrees,
     seed 4, tracked back to front throughout from one)."""
-    from depthtrack.track.height import start_frame
+    from depthtrack.track.heading import turned_pose
+    from depthtrack.track.height import faces_apart, start_frame
 
     squat = FirstFrames(squat, 8)
     body = BodyModel.default(height=1.75)
@@ -85,6 +86,8 @@ def test_a_given_start_on_a_later_frame_tracks_the_frames_before_it_backwards(sq
     assert start_frame(tracked, {}) == 0
     assert start_frame(tracked, {"deferred_frames": 6}) == 0            # past the trial
     assert start_frame([(0, None), (2, None), (3, None)], {"deferred_frames": 2}) == 0
+    # the hand-over takes the start's frame only where frame 0's pose faces apart from it
+    assert not faces_apart(body, poses[0], x3) and faces_apart(body, poses[0], turned_pose(x3))
 
 
 def test_a_backward_tracks_events_get_their_sequence_frames():
