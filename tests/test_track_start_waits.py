@@ -58,38 +58,6 @@ def test_a_start_waits_for_the_whole_person_and_tracks_the_frames_before_backwar
         TrackerSettings(start={"complete_fraction": 1.5})
 
 
-def test_a_given_start_on_a_later_frame_tracks_the_frames_before_it_backwards(squat):
-    """The re-track after the shape fit starts where the trial's deferred start did
-    (``init_frame``): the frames before it are tracked back from that pose, not started
-    from the first frame's (a tracked-back pose, unchecked: dev 02_03 from 120 degrees,
-    seed 4, tracked back to front throughout from one)."""
-    from depthtrack.track.heading import turned_pose
-    from depthtrack.track.height import faces_apart, start_frame
-
-    squat = FirstFrames(squat, 8)
-    body = BodyModel.default(height=1.75)
-    truth = squat.joints
-    depths = [squat.depth(i) for i in range(len(squat))]
-    x3 = fit_pose_to_joints(body, truth[3])
-    with Tracker(body, squat.camera, fps=squat.fps) as tracker:
-        poses = dict(tracker.stream(depths, init_pose=x3, init_frame=3))
-        info = tracker.state.init_info
-        log = tracker.frame_log
-    assert info["deferred_frames"] == 3
-    assert [f["index"] for f in log] == list(range(3, len(squat)))
-    assert sorted(poses) == list(range(len(squat))) and all(p is not None for p in poses.values())
-    err = _errors(np.array([body.joint_positions(poses[i]) for i in range(len(squat))]), truth)
-    assert err.max() < 0.1                        # the frames before it too
-    # where the trial's start took its frame: the deferred frames on from its first pose
-    tracked = [(i, None) for i in range(6)]
-    assert start_frame(tracked, {"deferred_frames": 2}) == 2
-    assert start_frame(tracked, {}) == 0
-    assert start_frame(tracked, {"deferred_frames": 6}) == 0            # past the trial
-    assert start_frame([(0, None), (2, None), (3, None)], {"deferred_frames": 2}) == 0
-    # the hand-over takes the start's frame only where frame 0's pose faces apart from it
-    assert not faces_apart(body, poses[0], x3) and faces_apart(body, poses[0], turned_pose(x3))
-
-
 def test_a_backward_tracks_events_get_their_sequence_frames():
     """The backward track counts its frames on from the start (log index ``start + k`` for
     the k-th frame back); its events are reported at the sequence frame ``start - k``."""

@@ -100,7 +100,7 @@ class FinalPolish:
         return result.pose
 
 
-def final_polished(tracker, frames, init_pose=None, init_frame: int = 0):
+def final_polished(tracker, frames, init_pose=None):
     """:func:`.loop.stream_poses`, each pose final-polished (:class:`FinalPolish`) on its
     own frame as it is yielded; yields ``(index, pose (48,) or None)`` in order.
 
@@ -130,7 +130,7 @@ def final_polished(tracker, frames, init_pose=None, init_frame: int = 0):
     tracker.segmenter = remembering
     try:
         with FinalPolish(tracker) as polish:
-            for i, x in stream_poses(tracker, read(), init_pose, init_frame):
+            for i, x in stream_poses(tracker, read(), init_pose):
                 depth = depths.pop(i, None)
                 if depth is not None:
                     index_of.pop(id(depth), None)

@@ -186,10 +186,7 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         ``trial_limb_swaps``, ``trial_reaches``, ``trial_reseats`` (the trial's corrections,
         entries as in ``summary.json``'s lists of the same names), ``frames_used``, ``seconds`` (tracking and
         fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
-        a pose, ``start_pose``: frame 0's pose (48 floats) refined with the fitted body,
-        ``start_frame`` 0; or, where the trial's start was deferred (:func:`start_frame`)
-        and frame 0's pose, tracked back from it, faces apart from it (:func:`faces_apart`),
-        the start frame's trial pose and that frame; and
+        a pose, ``start_pose``: its pose (48 floats) refined with the fitted body, and
         ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
         the front/back check).
     """
@@ -255,40 +252,10 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
                     fit_scale=fit_scale, log=log)
     info.update(fitted=True, frames_used=index, **fit.to_dict())
     info.update(fit_seconds=info.pop("seconds"), seconds=round(time.perf_counter() - t0, 2))
-    if tracked[0][0] == 0:
-        # frame 0's pose, refined with the fitted body: the re-track starts from it and so
-        # keeps the trial's front/back decision (re-deciding it with a body a few
-        # millimetres different flipped whole tracks on near-ties; README "Body shape").
-        # A start deferred until more of the person was in view (StartSettings.
-        # complete_fraction) took, and checked front/back on, a later frame, whose pose
-        # frame 0's was only tracked back from: where the two face apart, the re-track
-        # starts on the start's frame from its trial pose, so that the decision carries over
-        first = start_frame(tracked, start)
-        if first and not faces_apart(body, tracked[0][1], tracked[first][1]):
-            first = 0
-        refined = dict(zip(pick.tolist(), fit.poses))
-        info["start_pose"] = np.asarray(refined.get(first, tracked[first][1])).tolist()
-        info["start_frame"] = int(tracked[first][0])
+    if index[0] == 0:
+        # the first frame's pose, refined with the fitted body: the re-track starts from it
+        # and so keeps the trial's front/back decision (re-deciding it with a body a few
+        # millimetres different flipped whole tracks on near-ties; README "Body shape")
+        info["start_pose"] = fit.poses[0].tolist()
         info["start_info"] = start
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info
-
-
-def faces_apart(body, a, b) -> bool:
-    """Whether poses ``a`` and ``b`` ``(48,)`` of ``body`` face apart: their trunks' sideways
-    axes more than a quarter turn apart (:func:`~depthtrack.body.facing.back_to_front`)."""
-    from ..body.facing import back_to_front
-
-    joints = np.asarray(body.joint_positions(np.stack([a, b])))
-    return bool(back_to_front(joints[:1], joints[1:])[0] == 1.0)
-
-
-def start_frame(tracked, start_info: dict) -> int:
-    """The frame a trial track's automatic start took: the first frame with a pose, or,
-    where the start was deferred (``deferred_frames`` in ``start_info``, its ``init_info``),
-    that many frames later, when those frames have poses too (they were tracked back from
-    it). ``tracked``: ``[(index, pose), ...]`` of the frames with a pose, in order. Returns
-    the position in ``tracked`` (0 when the start is its first frame)."""
-    deferred = int(start_info.get("deferred_frames", 0) or 0)
-    if deferred <= 0 or deferred >= len(tracked):
-        return 0
-    return deferred if tracked[deferred][0] == tracked[0][0] + deferred else 0

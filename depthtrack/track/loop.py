@@ -24,7 +24,7 @@ from .state import TrackedFrame
 from .tracker import Tracker
 
 
-def stream_poses(tracker, frames, init_pose=None, init_frame: int = 0):
+def stream_poses(tracker, frames, init_pose=None):
     """Track depth frames from any iterable; yields ``(index, pose (48,) or None)`` in order.
 
     A pose is yielded as soon as it is final: at once, except around an automatic start
@@ -42,11 +42,7 @@ def stream_poses(tracker, frames, init_pose=None, init_frame: int = 0):
     ----------
     frames : iterable of (H, W) float
     init_pose : (48,) float, optional
-        Start from this pose on frame ``init_frame`` (ablation: ground-truth initialisation;
-        the shape fit's trial start).
-    init_frame : int
-        The frame ``init_pose`` belongs to (0); the frames before it are tracked backwards
-        from it, as after a deferred automatic start (``deferred_frames`` in ``init_info``).
+        Start from this pose on frame 0 (ablation: ground-truth initialisation).
     """
     s = tracker.settings
     source = iter(frames)
@@ -70,21 +66,9 @@ def stream_poses(tracker, frames, init_pose=None, init_frame: int = 0):
             break
         depth, i = got[0], i + 1
         if i == 0 and init_pose is not None:
-            early = [depth, *take(init_frame - 1)] if init_frame > 0 else []
-            later = take(1) if early else []
-            if later:
-                depth, i = later[0], len(early)
-            else:                           # no frame of its own: the pose is frame 0's
-                pending.extendleft(reversed(early[1:]))
-                early = []
             tracker.state, _, x = tracker.start(tracker.state, depth, pose=init_pose)
-            if early:
-                back, events = _track_back(tracker, tracker.state, early, 0)
-                held.extend(back)
-                tracker.state = _with_backward_events(tracker.state, events, len(early))
             held.append((i, x))
             recent.append((i, depth))
-            lowest = dict.fromkeys(CORRECTION_ORDER, i)
             settle_at = i + settle if settle else -1
         elif tracker.state.pose is not None:
             before = tracker.state
@@ -140,7 +124,9 @@ def stream_poses(tracker, frames, init_pose=None, init_frame: int = 0):
                     back, events = _track_back(tracker, start_state.replace(pose=started[0][1]),
                                                early, started[0][0] - len(early))
                     held.extend(back)
-                    tracker.state = _with_backward_events(tracker.state, events, len(early))
+                    tracker.state = tracker.state.replace(init_info={
+                        **tracker.state.init_info, "deferred_frames": len(early)}, **{
+                        key: getattr(tracker.state, key) + found for key, found in events.items()})
                 held.extend(started)
                 settle_at = max(started[0][0] + settle, i + 1) if settle else -1
         _stamp_indices(tracker.state.log, i)
@@ -230,14 +216,6 @@ def _track_back(tracker, state, early, first):
     events = {key: tuple(moved(e) for e in getattr(back[0], key)[len(getattr(state, key)):])
               for key in EVENT_LISTS}
     return [(first + k, p) for k, p in enumerate(back[1][::-1])], events
-
-
-def _with_backward_events(state, events, deferred: int):
-    """``state`` with the events of a backward track before its start (:func:`_track_back`)
-    joined to its lists, and ``deferred_frames`` (how many frames it tracked back) in its
-    ``init_info``."""
-    return state.replace(init_info={**state.init_info, "deferred_frames": deferred},
-                         **{key: getattr(state, key) + found for key, found in events.items()})
 
 
 def _stamp_indices(log, last) -> None:

@@ -86,11 +86,8 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
     With the shape fit (on sequences of at least :attr:`ShapeSettings.frames` frames)
     the first :attr:`ShapeSettings.frames` frames are tracked twice:
     once with the template to fit the shape, then, like every frame, with the fitted body
-    (so no frame's pose belongs to another body), starting from the trial's start pose
-    as the fit refined it (the trial's automatic start and front/back check carry over): on
-    frame 0, or where the trial's start waited for more of the person
-    (:attr:`StartSettings.complete_fraction`) on that later frame, the frames before it
-    tracked back from it.
+    (so no frame's pose belongs to another body), starting from the trial's frame-0 pose
+    as the fit refined it (the trial's automatic start and front/back check carry over).
     Its time is in ``timings["shape_fit_s"]``.
     """
     started = time.perf_counter()
@@ -114,19 +111,16 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
                                           fit_scale=not seq.subject_height,
                                           method="hc" if method == "hc" else "hc+ep")
     start_pose = shape_info.pop("start_pose", None)
-    init_frame = shape_info.pop("start_frame", 0)
     trial_start = shape_info.pop("start_info", None)
     if init_from_groundtruth:
-        init_pose, init_frame = fit_pose_to_joints(body, seq.joints[0]), 0
+        init_pose = fit_pose_to_joints(body, seq.joints[0])
     elif start_pose is not None:
-        # the trial track already started (and checked front/back) on that frame: frame 0,
-        # or a later one where the start waited for more of the person
+        # the trial track already started (and checked front/back) on frame 0
         init_pose = np.array(start_pose)
     with Tracker(body, seq.camera, method=method, likelihood=likelihood, fps=seq.fps,
                  settings=settings, segmenter=segmenter, detector=detector) as tracker:
         t0 = time.perf_counter()
-        result = tracker.track_sequence(seq, progress=progress, init_pose=init_pose,
-                                        init_frame=init_frame if init_pose is not None else 0)
+        result = tracker.track_sequence(seq, progress=progress, init_pose=init_pose)
         seconds = time.perf_counter() - t0
     wall = time.perf_counter() - started
     info = result.info
@@ -140,10 +134,7 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "initialisation": ("ground truth of frame 0 (ABLATION: --init-from-groundtruth)"
                            if init_from_groundtruth else "automatic (no ground truth used)"
                            + ("; the re-track after the shape fit starts from the trial "
-                              "track's frame-0 pose" if init_pose is not None and not init_frame
-                              else f"; the re-track after the shape fit starts from the trial "
-                              f"track's start pose on frame {init_frame}, the frames before "
-                              f"it tracked back" if init_pose is not None else "")),
+                              "track's frame-0 pose" if init_pose is not None else "")),
         # the re-track's own start is the given pose; the trial's start says how it was found
         "initialisation_details": {**info["initialisation"],
                                    **({"trial_start": trial_start}

@@ -375,7 +375,7 @@ class Tracker:
         return self._energy(frame).likelihood(pose)
 
     # ------------------------------------------------------------------ the frame loop
-    def stream(self, frames, init_pose=None, init_frame: int = 0):
+    def stream(self, frames, init_pose=None):
         """Track depth frames from any iterable; yields ``(index, pose (48,) or None)`` in order
         (:func:`.loop.stream_poses`; each pose final-polished where
         :attr:`~.settings.PolishSettings.final_tile` asks, :mod:`.final_polish`)."""
@@ -383,11 +383,10 @@ class Tracker:
         from .loop import stream_poses
 
         if self.settings.polish.final_tile and self.method != "ep":
-            return final_polished(self, frames, init_pose, init_frame)
-        return stream_poses(self, frames, init_pose, init_frame)
+            return final_polished(self, frames, init_pose)
+        return stream_poses(self, frames, init_pose)
 
-    def track_sequence(self, seq, progress=None, init_pose=None,
-                       init_frame: int = 0) -> TrackResult:
+    def track_sequence(self, seq, progress=None, init_pose=None) -> TrackResult:
         """Track every frame of a :class:`~depthtrack.io.sequence.Sequence` (:meth:`stream`).
 
         Frames without a person get NaN poses and joints.
@@ -398,17 +397,13 @@ class Tracker:
         progress : Progress or None
             ``update(1)`` after each frame.
         init_pose : (48,) float, optional
-            Start from this pose (ablation: ground-truth initialisation; the shape fit's
-            trial start) instead of the automatic start.
-        init_frame : int
-            The frame ``init_pose`` belongs to; the frames before it are tracked backwards
-            from it (:func:`.loop.stream_poses`).
+            Start from this pose (ablation: ground-truth initialisation) instead of the
+            automatic start.
         """
         F = len(seq)
         poses = np.full((F, self.body.dof), np.nan)
         t0 = time.perf_counter()
-        for i, x in self.stream((seq.depth(j) for j in range(F)), init_pose=init_pose,
-                                init_frame=init_frame):
+        for i, x in self.stream((seq.depth(j) for j in range(F)), init_pose=init_pose):
             if x is not None:
                 poses[i] = x
             if progress is not None:
