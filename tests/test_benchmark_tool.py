@@ -39,6 +39,13 @@ def test_synth_command_carries_the_condition(tool, tmp_path):
         assert part in text
 
 
+def test_fresh_noise_seeds_from_a_first_seed(tool, capsys):
+    assert tool.noise_seeds(3) == [1, 2, 3]
+    assert tool.noise_seeds(2, 4) == [4, 5]                 # a dev figure not tuned on
+    assert tool.main(["--split", "dev", "--wide", "--first-seed", "-1"]) == 2
+    assert "--first-seed" in capsys.readouterr().err
+
+
 def test_busiest_window_finds_the_motion(tool):
     # lie-down stands still for its first 15 % (1.5 s): the busiest 2 s start later
     assert tool.busiest_window("procedural", "lie-down", 2.0) >= 1.0
