@@ -116,17 +116,24 @@ def swapped_twins(body, pose, starts=TWIN_STARTS, swaps=("all",)):
     for swap in swaps:
         if swap not in TWIN_ORDERS:
             raise ValueError(f"unknown twin swap {swap!r}; choose from {', '.join(TWIN_SWAPS)}")
-        target = joints[TWIN_ORDERS[swap]]
-        for start in starts:
-            if start == "turned":
-                x0 = turned_pose(pose)
-            elif start == "rest":
-                x0 = root_from_joints(body, target, TRUNK_ROOT_JOINTS)
-            else:
-                raise ValueError(f"unknown twin start {start!r}; "
-                                 f"choose from {', '.join(TWIN_STARTS)}")
-            out.append(fit_joints(body, target, x0))
+        out.extend(twins_to(body, pose, joints[TWIN_ORDERS[swap]], starts))
     return np.array(out).reshape(-1, len(pose))
+
+
+def twins_to(body, pose, target, starts=TWIN_STARTS):
+    """``(len(starts), 48)``: poses facing the other way than ``pose (48,)`` fitted to the
+    joints ``target (15, 3)`` (:func:`fit_joints`) from each of ``starts`` (as for
+    :func:`swapped_twins`)."""
+    out = []
+    for start in starts:
+        if start == "turned":
+            x0 = turned_pose(pose)
+        elif start == "rest":
+            x0 = root_from_joints(body, target, TRUNK_ROOT_JOINTS)
+        else:
+            raise ValueError(f"unknown twin start {start!r}; choose from {', '.join(TWIN_STARTS)}")
+        out.append(fit_joints(body, target, x0))
+    return np.array(out).reshape(-1, len(np.asarray(pose)))
 
 
 def root_from_joints(body, target, ids):

@@ -231,16 +231,19 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         # the trial's own corrections: they shape its poses and so the fit and the start
         corrections = {f"trial_{k}": described[k] for k in ("heading_switches", "limb_swaps",
                                                              "reaches", "reseats")}
-    info = {"fitted": False, "frames_tracked": len(trial), "trial_recoveries": recoveries,
-            **corrections}
-    if len(tracked) < s.fit_frames:
-        info.update(reason=f"{len(tracked)} of the first {len(trial)} frames got a pose; "
-                           f"the fit needs {s.fit_frames}",
-                    seconds=round(time.perf_counter() - t0, 2))
-        return body, info
-    pick = np.unique(np.linspace(0, len(tracked) - 1, s.fit_frames).round().astype(int))
-    index = [tracked[k][0] for k in pick]
-    poses = np.array([tracked[k][1] for k in pick])
+        info = {"fitted": False, "frames_tracked": len(trial), "trial_recoveries": recoveries,
+                **corrections}
+        if len(tracked) < s.fit_frames:
+            info.update(reason=f"{len(tracked)} of the first {len(trial)} frames got a pose; "
+                               f"the fit needs {s.fit_frames}",
+                        seconds=round(time.perf_counter() - t0, 2))
+            return body, info
+        pick = np.unique(np.linspace(0, len(tracked) - 1, s.fit_frames).round().astype(int))
+        index = [tracked[k][0] for k in pick]
+        poses = np.array([tracked[k][1] for k in pick])
+        if s.carry_back:
+            poses, info["trial_carried_back"] = _carried_back(tracker, described, index, poses,
+                                                              depths)
     fgs = [segmenter(depths[i], camera) for i in index]
     try:
         full = body.with_mesh("full")
@@ -259,3 +262,20 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         info["start_pose"] = fit.poses[0].tolist()
         info["start_info"] = start
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info
+
+
+def _carried_back(tracker, described, index, poses, depths):
+    """The fit frames' poses ``(K, 48)`` (sequence frames ``index``) with the trial's later
+    heading switches and limb swaps carried back (:mod:`.carry_back`; the trial yields its
+    frames with no re-track), and ``[{"index", "exchanged"}]`` for each frame changed."""
+    from .carry_back import carry_back, corrections_of, exchanged_after
+
+    corrections = corrections_of(described)
+    cuts = [int(e["index"]) for e in described["recoveries"]]
+    out, changed = np.array(poses, dtype=np.float64), []
+    for k, i in enumerate(index):
+        kinds = exchanged_after(i, corrections, cuts)
+        if kinds:
+            out[k] = carry_back(tracker, depths[i], out[k], kinds)
+            changed.append({"index": int(i), "exchanged": sorted(kinds)})
+    return out, changed

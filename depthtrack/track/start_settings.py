@@ -252,6 +252,11 @@ class ShapeSettings:
     a frame scores, change the trial's later poses only where a track went wrong. Not
     adopted: without them the dev wide preset (seeds 1-2, paired) lost 1.1 ± 1.1 points,
     3 sequences by more than 5 against 1 gained (README, "Speed").
+
+    ``carry_back``: whether the trial's heading switches and limb swaps are carried back to
+    the fit frames before them (:mod:`.carry_back`): the trial tracks without re-tracks, so
+    a frame before a correction kept the sides the trial's start gave it, and the fit and
+    the re-track's first pose (frame 0's) took them so.
     """
 
     enabled: bool = True
@@ -262,12 +267,15 @@ class ShapeSettings:
     max_iterations: int = 20
     prior_weight: float = 30.0
     trial_rechecks: bool = True
+    carry_back: bool = False
 
     def __post_init__(self):
         _check(isinstance(self.enabled, bool), f"ShapeSettings.enabled must be true or false, "
                                                f"not {self.enabled!r}")
         _check(isinstance(self.trial_rechecks, bool), f"ShapeSettings.trial_rechecks must be "
                                                       f"true or false, not {self.trial_rechecks!r}")
+        _check(isinstance(self.carry_back, bool), f"ShapeSettings.carry_back must be "
+                                                  f"true or false, not {self.carry_back!r}")
         _check(int(self.fit_frames) >= 1, f"ShapeSettings.fit_frames must be at least 1, "
                                           f"not {self.fit_frames!r}")
         _check(int(self.frames) >= int(self.fit_frames),
