@@ -184,8 +184,10 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         ``fitted`` (bool), ``frames_tracked``, ``trial_recoveries`` (the trial's
         ``recoveries_tried`` and ``recoveries``), ``trial_heading_switches``,
         ``trial_limb_swaps``, ``trial_reaches``, ``trial_reseats`` (the trial's corrections,
-        entries as in ``summary.json``'s lists of the same names), ``frames_used``, ``seconds`` (tracking and
-        fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
+        entries as in ``summary.json``'s lists of the same names), ``frames_used``, with
+        :attr:`ShapeSettings.carry_back` ``trial_carried_back`` (``[{"index", "exchanged"}]``:
+        the fit frames whose poses took the trial's later corrections, and which sides),
+        ``seconds`` (tracking and fit), the fit's summary (:meth:`ShapeFit.to_dict`) or ``reason``; when frame 0 got
         a pose, ``start_pose``: its pose (48 floats) refined with the fitted body, and
         ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
         the front/back check).
@@ -243,7 +245,7 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         poses = np.array([tracked[k][1] for k in pick])
         if s.carry_back:
             poses, info["trial_carried_back"] = _carried_back(tracker, described, index, poses,
-                                                              depths)
+                                                              depths, s.carry_back)
     fgs = [segmenter(depths[i], camera) for i in index]
     try:
         full = body.with_mesh("full")
@@ -264,13 +266,14 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info
 
 
-def _carried_back(tracker, described, index, poses, depths):
+def _carried_back(tracker, described, index, poses, depths, kinds):
     """The fit frames' poses ``(K, 48)`` (sequence frames ``index``) with the trial's later
-    heading switches and limb swaps carried back (:mod:`.carry_back`; the trial yields its
-    frames with no re-track), and ``[{"index", "exchanged"}]`` for each frame changed."""
+    corrections of ``kinds`` (:attr:`ShapeSettings.carry_back`) carried back
+    (:mod:`.carry_back`; the trial yields its frames with no re-track), and
+    ``[{"index", "exchanged"}]`` for each frame changed."""
     from .carry_back import carry_back, corrections_of, exchanged_after
 
-    corrections = corrections_of(described)
+    corrections = [c for c in corrections_of(described) if c[1] in kinds]
     cuts = [int(e["index"]) for e in described["recoveries"]]
     out, changed = np.array(poses, dtype=np.float64), []
     for k, i in enumerate(index):

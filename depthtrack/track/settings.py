@@ -32,7 +32,8 @@ from .setting_checks import power_of_two as _power_of_two
 # judge's and the proposals' in judge_settings.py; import every group from here
 from .heading_settings import (START_SCORES, START_TWINS, TWIN_STARTS, TWIN_SWAPS,  # noqa: F401
                                HeadingSettings)
-from .start_settings import FACINGS, HeightSettings, ShapeSettings, StartSettings  # noqa: F401
+from .start_settings import (CARRY_KINDS, FACINGS, HeightSettings, ShapeSettings,  # noqa: F401
+                             StartSettings)
 from .judge_settings import RECOVER_BY, JudgeSettings, ProposalSettings  # noqa: F401
 
 

@@ -18,6 +18,8 @@ FACINGS = ("auto", "camera", "away")
 #: (:attr:`StartSettings.bends`).
 LEG_SEARCHES = ("never", "recovery", "always")
 BEND_SEARCHES = ("never", "start", "recovery", "always")
+#: The shape-fit trial's corrections that may be carried back (:attr:`ShapeSettings.carry_back`).
+CARRY_KINDS = ("heading", "legs", "arms")
 
 
 @dataclass(frozen=True)
@@ -253,10 +255,12 @@ class ShapeSettings:
     adopted: without them the dev wide preset (seeds 1-2, paired) lost 1.1 ± 1.1 points,
     3 sequences by more than 5 against 1 gained (README, "Speed").
 
-    ``carry_back``: whether the trial's heading switches and limb swaps are carried back to
-    the fit frames before them (:mod:`.carry_back`): the trial tracks without re-tracks, so
-    a frame before a correction kept the sides the trial's start gave it, and the fit and
-    the re-track's first pose (frame 0's) took them so.
+    ``carry_back``: which of the trial's corrections are carried back to the fit frames
+    before them (:mod:`.carry_back`; :data:`CARRY_KINDS`: ``"heading"``, the heading
+    switches; ``"legs"``, ``"arms"``, the limb swaps of those limbs; empty = none): the
+    trial tracks without re-tracks, so a frame before a correction kept the sides the
+    trial's start gave it, and the fit and the re-track's first pose (frame 0's) took them
+    so.
     """
 
     enabled: bool = True
@@ -267,15 +271,18 @@ class ShapeSettings:
     max_iterations: int = 20
     prior_weight: float = 30.0
     trial_rechecks: bool = True
-    carry_back: bool = False
+    carry_back: tuple = ()
 
     def __post_init__(self):
         _check(isinstance(self.enabled, bool), f"ShapeSettings.enabled must be true or false, "
                                                f"not {self.enabled!r}")
         _check(isinstance(self.trial_rechecks, bool), f"ShapeSettings.trial_rechecks must be "
                                                       f"true or false, not {self.trial_rechecks!r}")
-        _check(isinstance(self.carry_back, bool), f"ShapeSettings.carry_back must be "
-                                                  f"true or false, not {self.carry_back!r}")
+        carry = (self.carry_back,) if isinstance(self.carry_back, str) else self.carry_back
+        _check(isinstance(carry, (tuple, list)) and set(carry) <= set(CARRY_KINDS),
+               f"ShapeSettings.carry_back must be a choice of {', '.join(CARRY_KINDS)}, "
+               f"not {self.carry_back!r}")
+        object.__setattr__(self, "carry_back", tuple(carry))
         _check(int(self.fit_frames) >= 1, f"ShapeSettings.fit_frames must be at least 1, "
                                           f"not {self.fit_frames!r}")
         _check(int(self.frames) >= int(self.fit_frames),
