@@ -132,3 +132,36 @@ def test_the_trials_heading_switch_turns_the_fit_frames_and_the_start_before_it(
     truth = np.asarray(seq.joints[0])
     joints = np.asarray(body.joint_positions(np.array(carried["start_pose"])))
     assert np.median(np.linalg.norm(joints[SIDES_SWAPPED] - truth, axis=1)) < 0.06
+
+
+def test_the_trial_sides_tool_reports_each_frames_facing(tmp_path, capsys):
+    """``tools/trial_sides.py``: the shape fit's trial on a noise-free squat faces the
+    camera as the truth does on every frame; a sequence without ground truth is refused
+    with one line and status 2."""
+    render = pytest.importorskip("depthtrack.render")
+    try:
+        render.gl_context()
+    except render.GLUnavailableError as exc:
+        pytest.skip(f"no OpenGL: {exc}")
+    from tool_module import load_tool
+
+    from depthtrack.synth.generate import synthesize
+    from depthtrack.synth.procedural import procedural_motion
+
+    tool = load_tool("trial_sides")
+    body = BodyModel.default(1.75)
+    seq = tmp_path / "seq"
+    synthesize(seq, body, procedural_motion("squat", body, 25.0)[40:70:6], 25.0,
+               camera="sr4000", noise="none", subject={"height_m": 1.75})
+    out = tmp_path / "trial.json"
+    settings = '{"shape": {"frames": 4}, "heading": {"frames": 0}, "energy": {"prior_huber": 0.0}}'
+    assert tool.main([str(seq), "--settings", settings, "--json", str(out)]) == 0
+    import json
+    got = json.loads(out.read_text())[str(seq)]
+    assert got["frames"] == [0, 1, 2, 3]
+    assert max(got["facing_error_deg"]) < 30 and not any(got["legs_exchanged"])
+    assert "facing" in capsys.readouterr().out
+    (seq / "groundtruth" / "joints.csv").unlink()
+    assert tool.main([str(seq)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "ground truth" in err[0]

@@ -146,6 +146,22 @@ def body_for_sequence(seq, segmenter=None, frame: int = 0, settings=None, fit_he
     return fit_body_height(depth, fg, seq.camera, fps=seq.fps, settings=settings, segmenter=segmenter)
 
 
+def trial_settings(settings):
+    """The settings the shape fit's trial tracks with (:func:`fit_body_shape`), from the
+    track's ``settings`` (:class:`TrackerSettings`)."""
+    if not settings.shape.trial_rechecks:
+        settings = settings.updated(NO_RECHECKS)
+    # the trial yields its frames as it goes: no pose held back for a re-track after a switch
+    # nor a final polish: the fit refines the trial's poses itself; nor a reach into
+    # unexplained blobs, which the template's misfit makes of every limb
+    # nor a re-seat of a limb over free space or tracked hidden: the trial, whose start the
+    # track takes over, stays as it was measured (README, "A limb over free space")
+    return settings.updated({"heading": {"retro_frames": 0, "reseat_free": 0.0,
+                                         "reseat_hidden": 0.0},
+                             "polish": {"final_tile": 0},
+                             "propose": {"reach_unexplained": 0.0}})
+
+
 def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segmenter=None,
                    fit_scale: bool = True, log=None, method: str = "hc"):
     """The body with the shape (and, with ``fit_scale``, the size) that explains the first
@@ -195,19 +211,8 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
     from .shape_fit import fit_shape
     from .tracker import Tracker
 
-    settings = settings or TrackerSettings()
+    settings = trial_settings(settings or TrackerSettings())
     s = settings.shape
-    if not s.trial_rechecks:
-        settings = settings.updated(NO_RECHECKS)
-    # the trial yields its frames as it goes: no pose held back for a re-track after a switch
-    # nor a final polish: the fit refines the trial's poses itself; nor a reach into
-    # unexplained blobs, which the template's misfit makes of every limb
-    # nor a re-seat of a limb over free space or tracked hidden: the trial, whose start the
-    # track takes over, stays as it was measured (README, "A limb over free space")
-    settings = settings.updated({"heading": {"retro_frames": 0, "reseat_free": 0.0,
-                                             "reseat_hidden": 0.0},
-                                 "polish": {"final_tile": 0},
-                                 "propose": {"reach_unexplained": 0.0}})
     if segmenter is None:
         from ..detect import segment_foreground as segmenter
     t0 = time.perf_counter()
