@@ -10,6 +10,24 @@ from depthtrack.track.heading import (ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED,
                                       facing_direction)
 
 
+@pytest.fixture(scope="module")
+def squat(tmp_path_factory):
+    """A noise-free SR4000 squat of five frames (the template body), for the GL tests."""
+    render = pytest.importorskip("depthtrack.render")
+    try:
+        render.gl_context()
+    except render.GLUnavailableError as exc:
+        pytest.skip(f"no OpenGL: {exc}")
+    from depthtrack.synth.generate import synthesize
+    from depthtrack.synth.procedural import procedural_motion
+
+    body = BodyModel.default(1.75)
+    out = tmp_path_factory.mktemp("carry") / "seq"
+    synthesize(out, body, procedural_motion("squat", body, 25.0)[40:70:6], 25.0,
+               camera="sr4000", noise="none", subject={"height_m": 1.75})
+    return out
+
+
 def test_a_frame_carries_the_kinds_corrected_an_odd_number_of_times_after_it():
     described = {"heading_switches": [{"index": 12}, {"index": 5}],
                  "limb_swaps": [{"index": 8, "limbs": "legs"}]}
@@ -75,28 +93,18 @@ def test_which_corrections_are_carried_back_is_a_checked_setting():
 
 
 def test_the_trials_heading_switch_turns_the_fit_frames_and_the_start_before_it(monkeypatch,
-                                                                                 tmp_path):
+                                                                                 squat):
     """A heading switch the trial makes on its third frame (forced, the pose turned to its
     twin as a recheck would) is carried back: the fit frames before it and the frame-0 pose
     the track takes over face as the trial did after the switch."""
-    render = pytest.importorskip("depthtrack.render")
-    try:
-        render.gl_context()
-    except render.GLUnavailableError as exc:
-        pytest.skip(f"no OpenGL: {exc}")
     from depthtrack.io.sequence import open_sequence
-    from depthtrack.synth.generate import synthesize
-    from depthtrack.synth.procedural import procedural_motion
     from depthtrack.track import ShapeSettings, TrackerSettings
     from depthtrack.track import rechecks as rechecks_module
     from depthtrack.track.heading import swapped_twin
     from depthtrack.track.height import fit_body_shape
 
     body = BodyModel.default(1.75)
-    out = tmp_path / "seq"
-    synthesize(out, body, procedural_motion("squat", body, 25.0)[40:70:6], 25.0,
-               camera="sr4000", noise="none", subject={"height_m": 1.75})
-    seq = open_sequence(out)
+    seq = open_sequence(squat)
     original = rechecks_module.recheck_heading
 
     def forced(state, pose, refit, twins, pixels, settings, **given):
@@ -134,25 +142,17 @@ def test_the_trials_heading_switch_turns_the_fit_frames_and_the_start_before_it(
     assert np.median(np.linalg.norm(joints[SIDES_SWAPPED] - truth, axis=1)) < 0.06
 
 
-def test_the_trial_sides_tool_reports_each_frames_facing(tmp_path, capsys):
+def test_the_trial_sides_tool_reports_each_frames_facing(squat, tmp_path, capsys):
     """``tools/trial_sides.py``: the shape fit's trial on a noise-free squat faces the
     camera as the truth does on every frame; a sequence without ground truth is refused
     with one line and status 2."""
-    render = pytest.importorskip("depthtrack.render")
-    try:
-        render.gl_context()
-    except render.GLUnavailableError as exc:
-        pytest.skip(f"no OpenGL: {exc}")
+    import shutil
+
     from tool_module import load_tool
 
-    from depthtrack.synth.generate import synthesize
-    from depthtrack.synth.procedural import procedural_motion
-
     tool = load_tool("trial_sides")
-    body = BodyModel.default(1.75)
     seq = tmp_path / "seq"
-    synthesize(seq, body, procedural_motion("squat", body, 25.0)[40:70:6], 25.0,
-               camera="sr4000", noise="none", subject={"height_m": 1.75})
+    shutil.copytree(squat, seq)       # its ground truth is removed below
     out = tmp_path / "trial.json"
     settings = '{"shape": {"frames": 4}, "heading": {"frames": 0}, "energy": {"prior_huber": 0.0}}'
     assert tool.main([str(seq), "--settings", settings, "--json", str(out)]) == 0

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from .heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints, twins_to
-from .search import climb
+from .search import lowest_climb
 
 #: The joint exchange of each kind of correction (contract joint order).
 EXCHANGES = {"heading": SIDES_SWAPPED, "legs": LEGS_SWAPPED, "arms": ARMS_SWAPPED}
@@ -74,15 +74,32 @@ def carried_twins(body, pose, kinds, starts) -> np.ndarray:
     return fit_joints(body, target, pose)[None]
 
 
-def carry_back(tracker, depth, pose, kinds):
-    """``pose (48,)`` of the frame ``depth (H, W)`` with the sides of ``kinds`` exchanged
-    (:func:`carried_twins`), each fit climbed on that frame as the rechecks climb their twins
-    (the energy without the motion prior, ``heading.twin_passes``, from ``refit_level``);
-    returns the lowest, ``(48,)``. Uploads the frame to ``tracker``'s renderers."""
+def carry_back(tracker, depth, foreground, pose, kinds):
+    """``pose (48,)`` of the frame ``depth (H, W)`` (its segmentation ``foreground``) with
+    the sides of ``kinds`` exchanged (:func:`carried_twins`), each fit climbed on that frame
+    as the rechecks climb their twins (the energy without the motion prior,
+    ``heading.twin_passes``, from ``refit_level``); returns the lowest, ``(48,)``. Uploads
+    the frame to ``tracker``'s renderers."""
     h = tracker.settings.heading
-    frame, _ = tracker._observe(tracker.state, depth, predicted=np.asarray(pose, dtype=np.float64))
-    energy = tracker._energy(frame)
-    fits = [climb(energy, tracker.climbers.start, twin, tracker.recorder, passes=h.twin_passes,
-                  level_offset=h.refit_level)
-            for twin in carried_twins(tracker.body, pose, kinds, h.twin_starts)]
-    return np.asarray(min(fits, key=lambda f: float(f[1]))[0], dtype=np.float64)
+    frame, _ = tracker._observe(tracker.state, depth, predicted=np.asarray(pose, dtype=np.float64),
+                                foreground=foreground)
+    x, _ = lowest_climb(tracker._energy(frame), tracker.climbers.start,
+                        carried_twins(tracker.body, pose, kinds, h.twin_starts), tracker.recorder,
+                        passes=h.twin_passes, level_offset=h.refit_level)
+    return np.asarray(x, dtype=np.float64)
+
+
+def carry_back_frames(tracker, described, index, poses, depths, foregrounds, kinds):
+    """The poses ``(K, 48)`` of the sequence frames ``index`` (their ``depths`` and
+    ``foregrounds``, K each) with the later corrections of ``kinds`` in ``described`` (the
+    tracker's :meth:`~.tracker.Tracker.describe`) carried back, up to its recoveries; and
+    ``[{"index", "exchanged"}]`` for each frame changed."""
+    corrections = [c for c in corrections_of(described) if c[1] in kinds]
+    cuts = [int(e["index"]) for e in described["recoveries"]]
+    out, changed = np.array(poses, dtype=np.float64), []
+    for k, i in enumerate(index):
+        exchanged = exchanged_after(i, corrections, cuts)
+        if exchanged:
+            out[k] = carry_back(tracker, depths[k], foregrounds[k], out[k], exchanged)
+            changed.append({"index": int(i), "exchanged": sorted(exchanged)})
+    return out, changed

@@ -208,6 +208,7 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         ``start_info``: how the trial's start went (its ``init_info``: candidates, finalists,
         the front/back check).
     """
+    from .carry_back import carry_back_frames
     from .shape_fit import fit_shape
     from .tracker import Tracker
 
@@ -248,10 +249,11 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         pick = np.unique(np.linspace(0, len(tracked) - 1, s.fit_frames).round().astype(int))
         index = [tracked[k][0] for k in pick]
         poses = np.array([tracked[k][1] for k in pick])
+        fgs = [segmenter(depths[i], camera) for i in index]
         if s.carry_back:
-            poses, info["trial_carried_back"] = _carried_back(tracker, described, index, poses,
-                                                              depths, s.carry_back)
-    fgs = [segmenter(depths[i], camera) for i in index]
+            # the trial yields its frames with no re-track: its later corrections, carried back
+            poses, info["trial_carried_back"] = carry_back_frames(
+                tracker, described, index, poses, [depths[i] for i in index], fgs, s.carry_back)
     try:
         full = body.with_mesh("full")
     except ValueError:
@@ -270,20 +272,3 @@ def fit_body_shape(frames, body, camera, fps: float = 25.0, settings=None, segme
         info["start_info"] = start
     return fit.body.with_mesh(body.mesh_name) if full is not body else fit.body, info
 
-
-def _carried_back(tracker, described, index, poses, depths, kinds):
-    """The fit frames' poses ``(K, 48)`` (sequence frames ``index``) with the trial's later
-    corrections of ``kinds`` (:attr:`ShapeSettings.carry_back`) carried back
-    (:mod:`.carry_back`; the trial yields its frames with no re-track), and
-    ``[{"index", "exchanged"}]`` for each frame changed."""
-    from .carry_back import carry_back, corrections_of, exchanged_after
-
-    corrections = [c for c in corrections_of(described) if c[1] in kinds]
-    cuts = [int(e["index"]) for e in described["recoveries"]]
-    out, changed = np.array(poses, dtype=np.float64), []
-    for k, i in enumerate(index):
-        kinds = exchanged_after(i, corrections, cuts)
-        if kinds:
-            out[k] = carry_back(tracker, depths[i], out[k], kinds)
-            changed.append({"index": int(i), "exchanged": sorted(kinds)})
-    return out, changed

@@ -20,7 +20,7 @@ from .proposals import frame_proposals
 from .reach import (blob_reach_candidates, hidden_limbs, reach_candidates, recheck_reach,
                     share_in_pixels, unexplained_blobs)
 from .reseat import free_space_limbs, limb_climber, limb_library, recheck_reseat
-from .search import climb
+from .search import climb, lowest_climb
 from .start import global_search, start_up, wrong_side
 
 
@@ -200,9 +200,8 @@ def turned_start(tracker, frame):
         else:
             twins = (heading_twins(tracker.body, s, pose) if kind == "swapped"
                      else [turned_pose(pose)])
-            fits = [climb(energy, tracker.climbers.start, t, tracker.recorder, passes=g.passes)
-                    for t in twins]
-            x = min(fits, key=lambda f: float(f[1]))[0]
+            x, _ = lowest_climb(energy, tracker.climbers.start, twins, tracker.recorder,
+                                passes=g.passes)
         if x is None or wrong_side(x, g.facing, start_up(frame.foreground), g.facing_margin)[0]:
             return None
         return x

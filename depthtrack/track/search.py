@@ -71,6 +71,14 @@ def climb(energy, climber, pose, recorder, start_energy=None, blocks=None, passe
     return res.pose, res.energy
 
 
+def lowest_climb(energy, climber, poses, recorder, passes: int = 1, level_offset: int = 0):
+    """Each of ``poses (K, 48)`` climbed by :func:`climb`; returns the lowest climbed
+    ``(pose (48,), energy float)`` (the first of equals)."""
+    fits = [climb(energy, climber, x, recorder, passes=passes, level_offset=level_offset)
+            for x in poses]
+    return min(fits, key=lambda f: float(f[1]))
+
+
 def predict(prior, body, pose, velocity):
     """``(x_pred (48,), v_pred (48,))``: the prior's prediction, clipped to the joint limits."""
     x_pred, v_pred = prior.predict(pose, velocity)
