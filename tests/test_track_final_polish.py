@@ -76,3 +76,50 @@ def test_tests_run_without_the_final_polish_unless_marked():
     from depthtrack.track.settings import PolishSettings
 
     assert PolishSettings().final_tile == 256
+
+
+def test_settings_check_the_final_passes():
+    from depthtrack.errors import InputError
+
+    for bad in (0, 1.5, True):
+        with pytest.raises(InputError, match="final_passes"):
+            TrackerSettings().updated({"polish": {"final_passes": bad}})
+
+
+def test_each_further_climb_lays_the_body_closer(squat12):
+    """``final_passes``: two passes are exactly one final polish applied twice, and from
+    poses a few centimetres off (the true poses nudged) three passes leave less of the
+    person unexplained, with a better silhouette, than one."""
+    from depthtrack.detect import segment_foreground
+    from depthtrack.evaluate.fit import frame_fit
+    from depthtrack.render import FrameRenderer
+    from depthtrack.track.final_polish import FinalPolish
+
+    seq = squat12
+    body = BodyModel.default(height=1.75)
+    rng = np.random.default_rng(5)
+    frames = (0, 5, 10)
+    starts = {}
+    for i in frames:
+        x = fit_pose_to_joints(body, seq.joints[i])
+        x[:3] += rng.normal(0.0, 0.02, 3)           # the pelvis 2 cm off
+        x[3:] += rng.normal(0.0, 0.06, len(x) - 3)  # every rotation a few degrees off
+        starts[i] = body.clip(x[None])[0]
+    polished = {}
+    for passes in (1, 2, 3):
+        settings = TrackerSettings().updated({"polish": {"final_passes": passes}})
+        with Tracker(body, seq.camera, settings=settings) as tracker:
+            with FinalPolish(tracker) as polish:
+                polished[passes] = {i: polish(seq.depth(i), x) for i, x in starts.items()}
+                if passes == 1:
+                    twice = {i: polish(seq.depth(i), polished[1][i]) for i in frames}
+    for i in frames:
+        np.testing.assert_array_equal(twice[i], polished[2][i])
+    figures = {}
+    with FrameRenderer(seq.camera) as renderer:
+        for passes, poses in polished.items():
+            figures[passes] = np.mean(
+                [frame_fit(segment_foreground(seq.depth(i), seq.camera).mask, seq.depth(i),
+                           renderer.render(body, poses[i]))[:2] for i in frames], axis=0)
+    (iou1, unexplained1), (iou3, unexplained3) = figures[1], figures[3]
+    assert unexplained3 < unexplained1 and iou3 > iou1

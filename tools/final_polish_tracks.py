@@ -6,7 +6,10 @@ the poses reported, so a track kept from a run without it (``--settings '{"polis
 run with it reports. Printed (and written with ``--json``): within 10 cm, mean joint error,
 silhouette IoU, unexplained share and median depth residual of the track as kept and as
 polished, and the polish's seconds and candidates per frame. How the default's dev and test
-figures for it were measured (README, "Final polish").
+figures for it were measured (README, "Final polish"). Since ``final_passes`` passes are the
+one-pass polish applied that many times, a track kept with ``n`` passes polished with
+``--settings '{"polish": {"final_passes": k}}'`` gives what ``n + k`` passes report (README,
+"Final polish, climbed again").
 
     .venv/bin/python tools/final_polish_tracks.py SEQ TRACK [--json OUT.json] [--settings JSON]
 """

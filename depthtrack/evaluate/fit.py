@@ -66,6 +66,49 @@ def frame_fit(person, depth, rendered, tolerance: float = EXPLAINED_TOLERANCE_M)
     return float(iou), float(unexplained), median
 
 
+#: Keys of :func:`unexplained_parts`, in order.
+PART_KEYS = ("uncovered_near_outline", "uncovered_inside", "off_near_outline", "off_inside",
+             "body_off_person")
+
+
+def unexplained_parts(person, depth, rendered, band: int = 2,
+                      tolerance: float = EXPLAINED_TOLERANCE_M):
+    """Where one frame's unexplained person pixels are, as counts ``(6,)``: the person's
+    pixels with a reading, then :data:`PART_KEYS`.
+
+    "Uncovered" pixels are not drawn by the body, "off" ones are drawn more than
+    ``tolerance`` from their reading; each is "near the outline" within ``band`` pixels of
+    the body's outline (a body laid a pixel or two off its person), else inside/away.
+    ``body_off_person`` counts the body's pixels outside the person's foreground. The
+    unexplained share of :func:`frame_fit` is the sum of the first four over the first.
+
+    Parameters
+    ----------
+    person : (H, W) bool
+    depth : (H, W) float
+        Observed depth (m), 0 = no reading.
+    rendered : (H, W) float
+        The body's depth (m), 0 where it is not drawn.
+    """
+    import cv2
+
+    person = np.asarray(person, dtype=bool)
+    depth = np.asarray(depth, dtype=np.float64)
+    rendered = np.asarray(rendered, dtype=np.float64)
+    model = rendered > 0
+    square = np.ones((3, 3), np.uint8)
+    m8 = model.astype(np.uint8)
+    outline = (cv2.dilate(m8, square, iterations=band).astype(bool)
+               & ~cv2.erode(m8, square, iterations=band, borderValue=1).astype(bool))
+    reading = person & (depth > 0)
+    uncovered = reading & ~model
+    off = reading & model & (np.abs(depth - rendered) > tolerance)
+    return np.array([np.count_nonzero(reading),
+                     np.count_nonzero(uncovered & outline), np.count_nonzero(uncovered & ~outline),
+                     np.count_nonzero(off & outline), np.count_nonzero(off & ~outline),
+                     np.count_nonzero(model & ~person)], dtype=np.int64)
+
+
 def summarize_fit(per_frame) -> dict:
     """Sequence figures from per-frame ``(F, 3)`` (iou, unexplained, residual) rows.
 
@@ -157,5 +200,5 @@ def shape_errors(body, truth) -> dict:
     return {"segment_length_error_m": median, "segment_length_errors_m": errors or None}
 
 
-__all__ = ["EXPLAINED_TOLERANCE_M", "FIT_KEYS", "frame_fit", "summarize_fit", "person_masks",
+__all__ = ["EXPLAINED_TOLERANCE_M", "FIT_KEYS", "PART_KEYS", "frame_fit", "unexplained_parts", "summarize_fit", "person_masks",
            "track_fit", "shape_truth", "shape_errors"]

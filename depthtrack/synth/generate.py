@@ -164,12 +164,25 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
     reader's naming conventions do not find.
     """
     from ..body import BodyModel
+
+    body = BodyModel.default(height=height, mesh="full") if body is None else body
+    poses, source = bvh_world_poses(motion_path, body, fps, start, seconds, units,
+                                    skip_leading_jump, joint_map)
+    return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
+                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
+                      subject=subject, pitch=pitch)
+
+
+def bvh_world_poses(motion_path, body, fps=25.0, start=0.0, seconds=None, units=None,
+                    skip_leading_jump=True, joint_map=None):
+    """A BVH motion as :func:`synthesize_bvh` renders it: ``(poses (F, D), source dict)``,
+    the world-frame poses of ``body`` (retargeted, leading jump skipped, resampled to
+    ``fps``, cut to ``[start, start + seconds)``) and the ``synth.source`` block."""
     from ..io.bvh import read_bvh
     from ..motion.retarget import canonical_axes, resample_poses, retarget, subject_height
 
     motion = read_bvh(motion_path, units=units, joint_map=joint_map)
     motion.contract_joint_indices()     # refuse a skeleton we cannot map before any work
-    body = BodyModel.default(height=height, mesh="full") if body is None else body
     to_world = np.eye(4)
     to_world[:3, :3] = canonical_axes(motion)     # BVH world -> y-down world facing like the rest pose
     scale = float(body.height) / subject_height(motion, body)
@@ -191,9 +204,7 @@ def synthesize_bvh(motion_path, out, fps=25.0, start=0.0, seconds=None, camera="
               "seconds": None if seconds is None else float(seconds),
               "retarget": {"method": "bone directions, twist from BVH, hip centre follows BVH",
                            "root_scale": round(scale, 6)}}
-    return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
-                      camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
-                      subject=subject, pitch=pitch)
+    return poses, source
 
 
 def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="sr4000",
@@ -201,16 +212,67 @@ def synthesize_procedural(name, out, fps=25.0, start=0.0, seconds=None, camera="
                           camera_height=None, quiet=True, body=None, subject=None, pitch=None) -> dict:
     """Synthesize a sequence from a built-in motion (see :mod:`depthtrack.synth.procedural`)."""
     from ..body import BodyModel
-    from .procedural import PROCEDURAL_MOTIONS, procedural_motion
 
-    if name not in PROCEDURAL_MOTIONS:
-        raise InputError(None, f"unknown procedural motion {name!r}; known: {', '.join(PROCEDURAL_MOTIONS)}")
     body = BodyModel.default(height=height, mesh="full") if body is None else body
-    total = None if seconds is None else start + seconds
-    poses = procedural_motion(name, body, fps, total)
-    poses = _window(poses, fps, start, seconds)
+    poses = procedural_world_poses(name, body, fps, start, seconds)
     source = {"kind": "procedural", "name": name, "start_s": start,
               "seconds": None if seconds is None else float(seconds)}
     return synthesize(out, body, poses, fps, camera=camera, distance=distance, azimuth=azimuth,
                       camera_height=camera_height, noise=noise, seed=seed, source=source, quiet=quiet,
                       subject=subject, pitch=pitch)
+
+
+def procedural_world_poses(name, body, fps=25.0, start=0.0, seconds=None):
+    """A built-in motion as :func:`synthesize_procedural` renders it: world-frame poses
+    ``(F, D)`` of ``body``, cut to ``[start, start + seconds)``."""
+    from .procedural import PROCEDURAL_MOTIONS, procedural_motion
+
+    if name not in PROCEDURAL_MOTIONS:
+        raise InputError(None, f"unknown procedural motion {name!r}; known: {', '.join(PROCEDURAL_MOTIONS)}")
+    total = None if seconds is None else start + seconds
+    return _window(procedural_motion(name, body, fps, total), fps, start, seconds)
+
+
+def rendered_poses(meta, motion_dir=None):
+    """The body and the camera-frame poses a synthetic sequence was rendered with, rebuilt
+    from its ``sequence.json`` (``meta``: the parsed file): ``(body, poses (F, D))``.
+
+    The subject is rebuilt from ``synth.shape`` (scales, height, clothing and its seed)
+    when there, else the default body of ``synth.body.height_m``; the motion from
+    ``synth.source`` (a BVH file is looked for by name in ``motion_dir``); the camera
+    frame from ``synth.placement``. For oracle figures (the true body at the true poses);
+    the tracker never reads it.
+
+    Raises
+    ------
+    InputError
+        Not a synthetic sequence, or its motion file is not in ``motion_dir``.
+    """
+    from ..body import BodyModel
+    from ..body.shape import BodyShape
+    from .subject import make_subject
+
+    synth = meta.get("synth") if isinstance(meta, dict) else None
+    if not isinstance(synth, dict) or "source" not in synth or "placement" not in synth:
+        raise InputError(None, "not a synthetic sequence (sequence.json has no synth block)")
+    fps = float(meta["fps"])
+    shape = synth.get("shape")
+    if isinstance(shape, dict) and "scales" in shape:
+        body, _ = make_subject(shape.get("height_m"), BodyShape.from_dict(shape["scales"]),
+                               shape.get("seed"), (shape.get("clothing") or {}).get("kind", "none"))
+    else:
+        body = BodyModel.default(height=float(synth["body"]["height_m"]), mesh="full")
+    src = synth["source"]
+    if src.get("kind") == "procedural":
+        world = procedural_world_poses(src["name"], body, fps, src["start_s"], src.get("seconds"))
+    elif src.get("kind") == "bvh":
+        path = os.path.join(os.fspath(motion_dir or "."), src["file"])
+        if not os.path.isfile(path):
+            raise InputError(path, "the sequence's motion file is not there (give its folder)")
+        world, _ = bvh_world_poses(path, body, fps, src["start_s"], src.get("seconds"),
+                                   units=src.get("units_m"),
+                                   skip_leading_jump=bool(src.get("skipped_leading_frames")),
+                                   joint_map=src.get("joint_map"))
+    else:
+        raise InputError(None, f"cannot rebuild a synthetic source of kind {src.get('kind')!r}")
+    return body, transform_poses(world, np.asarray(synth["placement"]["world_to_camera"], float))

@@ -13,7 +13,9 @@ re-track it any more -- it is climbed again on that frame without the motion pri
 tiles as fine as the camera's pixels (:func:`final_tile`: the power of two nearest the
 ROI's side, at most :attr:`~.settings.PolishSettings.final_tile`), from the search's finest
 rung down :attr:`~.settings.PolishSettings.final_levels` finer ones (each halves every
-step). The track itself does not change: the next frame is tracked from the pose the loop
+step), :attr:`~.settings.PolishSettings.final_passes` times (each climb from that rung again,
+on the frame observed around the pose the last climb left; one climb stops long before it
+converges). The track itself does not change: the next frame is tracked from the pose the loop
 had, so the decisions are the same with or without this stage, and only the poses
 reported are finer. Its time and candidates are the ``final`` stage of the timings.
 """
@@ -80,24 +82,38 @@ class FinalPolish:
     def __call__(self, depth, pose, foreground=None):
         """``pose (48,)`` climbed on ``depth (H, W)``: the polished pose, or ``pose`` itself
         where the frame's segmentation finds nobody. ``foreground``: the frame's
-        segmentation when the caller has it (else it is segmented here)."""
+        segmentation when the caller has it (else it is segmented here).
+
+        :attr:`~.settings.PolishSettings.final_passes` climbs, each on the frame observed
+        around the pose the last one left (the ROI and the region near the body follow it),
+        so ``n`` passes are the one-pass polish applied ``n`` times; a climb that moves
+        nothing ends them."""
         t = self.tracker
-        s = t.settings
-        pose = np.asarray(pose, dtype=np.float64)
+        pose = np.asarray(pose, dtype=np.float64).copy()
         with t.recorder.timed("final"):
             depth = as_depth(depth, t.camera)
             if foreground is None:
                 foreground = t.segmenter(depth, t.camera)
             if not np.any(foreground.mask):
-                return pose.copy()
-            frame, _ = observe(depth, foreground, t.camera, s, floor=t.state.floor,
-                               predicted_joints=np.asarray(t.body.joint_positions(pose)),
-                               predicted_silhouette=t.renderers.silhouette(pose))
-            renderer = self._renderer(final_tile(frame.roi[2], s.polish.final_tile))
-            renderer.set_observation(frame.observed, roi=frame.roi)
-            energy = t._energy(frame).on(renderer)
-            result = self.climber.climb(pose, energy, level_offset=s.search.levels - 1)
-        return result.pose
+                return pose
+            for _ in range(t.settings.polish.final_passes):
+                climbed = self._climb(depth, foreground, pose)
+                if np.array_equal(climbed, pose):
+                    break
+                pose = climbed
+        return pose
+
+    def _climb(self, depth, foreground, pose):
+        """One climb of ``pose (48,)`` on the frame observed around it."""
+        t = self.tracker
+        s = t.settings
+        frame, _ = observe(depth, foreground, t.camera, s, floor=t.state.floor,
+                           predicted_joints=np.asarray(t.body.joint_positions(pose)),
+                           predicted_silhouette=t.renderers.silhouette(pose))
+        renderer = self._renderer(final_tile(frame.roi[2], s.polish.final_tile))
+        renderer.set_observation(frame.observed, roi=frame.roi)
+        energy = t._energy(frame).on(renderer)
+        return self.climber.climb(pose, energy, level_offset=s.search.levels - 1).pose
 
 
 def final_polished(tracker, frames, init_pose=None):

@@ -274,6 +274,12 @@ class PolishSettings:
         Rungs the final polish adds below the search's finest (each halves the steps).
     final_iterations : int
         Most batches per block of the final polish.
+    final_passes : int
+        Times the final polish climbs each pose, every climb from the search's finest rung
+        again (a climb stops long before it converges: each further one lays the limbs
+        closer to their pixels; README "Final polish, climbed again"). Changes only the
+        poses reported, never a decision (the heading recheck's close-call polish climbs
+        once).
     """
 
     fine_tile: int = 128
@@ -281,11 +287,14 @@ class PolishSettings:
     final_tile: int = 256
     final_levels: int = 2
     final_iterations: int = 4
+    final_passes: int = 3
 
     def __post_init__(self):
         _power_of_two(self.fine_tile, "fine_tile", zero_ok=True)
         _power_of_two(self.final_tile, "final_tile", zero_ok=True)
-        _positive(self, "fine_iterations", "final_iterations")
+        _positive(self, "fine_iterations", "final_iterations", "final_passes")
+        _check(isinstance(self.final_passes, int) and not isinstance(self.final_passes, bool),
+               f"PolishSettings.final_passes must be a whole number, not {self.final_passes!r}")
         _positive(self, "final_levels", allow_zero=True)
 
 
