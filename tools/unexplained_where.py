@@ -69,14 +69,18 @@ def main(argv=None) -> int:
         seq = open_sequence(args.seq)
         track = read_track(args.track)
         body_path = args.track / "body.json"
-        body = BodyModel.from_json(body_path) if body_path.is_file() else None
-        if body is None:
+        if not body_path.is_file():
             raise InputError(body_path, "missing (the track's fitted body)")
+        body = BodyModel.from_json(body_path)
         meta_path = args.seq / "sequence.json"
         meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
         truth = rendered_poses(meta, args.motions) if "synth" in meta else None
     except (InputError, OSError, ValueError) as exc:
         print(f"unexplained_where: {exc}", file=sys.stderr)
+        return 2
+    except (KeyError, TypeError) as exc:
+        print(f"unexplained_where: {args.seq / 'sequence.json'}: not a synthetic sequence's "
+              f"synth block ({exc!r} missing or malformed)", file=sys.stderr)
         return 2
     from depthtrack.render import FrameRenderer
 

@@ -200,5 +200,5 @@ def shape_errors(body, truth) -> dict:
     return {"segment_length_error_m": median, "segment_length_errors_m": errors or None}
 
 
-__all__ = ["EXPLAINED_TOLERANCE_M", "FIT_KEYS", "PART_KEYS", "frame_fit", "unexplained_parts", "summarize_fit", "person_masks",
-           "track_fit", "shape_truth", "shape_errors"]
+__all__ = ["EXPLAINED_TOLERANCE_M", "FIT_KEYS", "PART_KEYS", "frame_fit", "unexplained_parts",
+           "summarize_fit", "person_masks", "track_fit", "shape_truth", "shape_errors"]
