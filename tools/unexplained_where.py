@@ -26,7 +26,7 @@ REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from depthtrack.errors import InputError  # noqa: E402
-from depthtrack.evaluate.fit import PART_KEYS, person_masks, unexplained_parts  # noqa: E402
+from depthtrack.evaluate.fit import PART_KEYS, frame_fit, person_masks, unexplained_parts  # noqa: E402
 from depthtrack.io import open_sequence, read_track  # noqa: E402
 from depthtrack.io.atomic import write_text_atomic  # noqa: E402
 
@@ -40,10 +40,9 @@ def parts_of(seq, masks, body, poses, renderer) -> dict:
     for i in range(len(seq)):
         if not masks[i].any() or not np.all(np.isfinite(poses[i])):
             continue
-        rendered = renderer.render(body, poses[i])
-        counts += unexplained_parts(masks[i], seq.depth(i), rendered)
-        model = rendered > 0
-        ious.append(np.count_nonzero(masks[i] & model) / np.count_nonzero(masks[i] | model))
+        depth, rendered = seq.depth(i), renderer.render(body, poses[i])
+        counts += unexplained_parts(masks[i], depth, rendered)
+        ious.append(frame_fit(masks[i], depth, rendered)[0])
     n = max(int(counts[0]), 1)
     out = {k: float(c) / n for k, c in zip(PART_KEYS, counts[1:])}
     out["unexplained"] = float(counts[1:5].sum()) / n
