@@ -22,6 +22,15 @@ def test_the_tile_is_the_power_of_two_nearest_the_roi():
     assert final_tile(330, 128) == 128 and final_tile(330, 64) == 64
 
 
+def test_the_tile_rounded_up_holds_every_camera_pixel():
+    """``final_tile_round`` "up": the smallest power of two at least the ROI's side."""
+    rois = (130, 180, 182, 330, 700, 40, 64, 65, 0, float("nan"))
+    assert [final_tile(r, 256, rounding="up") for r in rois] == [256, 256, 256, 256, 256, 64, 64,
+                                                                  128, 64, 64]
+    assert final_tile(100, 128, rounding="up") == 128 and final_tile(100, 64, rounding="up") == 64
+    assert [final_tile(r, 256, rounding="nearest") for r in (130, 180)] == [128, 128]
+
+
 def test_settings_check_the_final_polish():
     from depthtrack.errors import InputError
 
@@ -29,6 +38,9 @@ def test_settings_check_the_final_polish():
         TrackerSettings().updated({"polish": {"final_tile": 100}})
     with pytest.raises(InputError, match="final_levels"):
         TrackerSettings().updated({"polish": {"final_levels": -1}})
+    for bad in ("ceil", None):
+        with pytest.raises(InputError, match="final_tile_round"):
+            TrackerSettings().updated({"polish": {"final_tile_round": bad}})
     assert TrackerSettings().polish.final_tile == 256
     assert TrackerSettings().updated({"polish": {"final_tile": 0}}).polish.final_levels == 2
 
@@ -123,3 +135,40 @@ def test_each_further_climb_lays_the_body_closer(squat12):
                            renderer.render(body, poses[i]))[:2] for i in frames], axis=0)
     (iou1, unexplained1), (iou3, unexplained3) = figures[1], figures[3]
     assert unexplained3 < unexplained1 and iou3 > iou1
+
+
+def test_the_tile_rounded_up_renders_every_camera_pixel(squat12):
+    """On the SR4000 squat (a person box of 100 to 180 pixels) the final polish renders on
+    128-pixel tiles by the nearest rule, and on 256 by ``final_tile_round`` "up" wherever
+    the box is over 128; from nudged true poses the finer tiles fit the person better."""
+    from depthtrack.detect import segment_foreground
+    from depthtrack.evaluate.fit import frame_fit
+    from depthtrack.render import FrameRenderer
+    from depthtrack.track.final_polish import FinalPolish
+
+    seq = squat12
+    body = BodyModel.default(height=1.75)
+    rng = np.random.default_rng(11)
+    frames = (0, 4, 8, 11)
+    starts = {}
+    for i in frames:
+        x = fit_pose_to_joints(body, seq.joints[i])
+        x[:3] += rng.normal(0.0, 0.02, 3)
+        x[3:] += rng.normal(0.0, 0.06, len(x) - 3)
+        starts[i] = body.clip(x[None])[0]
+    polished, tiles = {}, {}
+    for rounding in ("nearest", "up"):
+        settings = TrackerSettings().updated({"polish": {"final_tile_round": rounding}})
+        with Tracker(body, seq.camera, settings=settings) as tracker:
+            with FinalPolish(tracker) as polish:
+                polished[rounding] = {i: polish(seq.depth(i), x) for i, x in starts.items()}
+                tiles[rounding] = sorted(polish._renderers)
+    assert tiles["nearest"] == [128] and 256 in tiles["up"]
+    figures = {}
+    with FrameRenderer(seq.camera) as renderer:
+        for rounding, poses in polished.items():
+            figures[rounding] = np.mean(
+                [frame_fit(segment_foreground(seq.depth(i), seq.camera).mask, seq.depth(i),
+                           renderer.render(body, poses[i]))[:2] for i in frames], axis=0)
+    print(figures)
+    assert figures["up"][0] > figures["nearest"][0] and figures["up"][1] < figures["nearest"][1]

@@ -10,8 +10,9 @@ body fitted to the true joints reaches 0.91 to 0.93 and 1 to 2 %.
 
 So once a pose is final -- :func:`.loop.stream_poses` yields it, and no correction can
 re-track it any more -- it is climbed again on that frame without the motion prior, on
-tiles as fine as the camera's pixels (:func:`final_tile`: the power of two nearest the
-ROI's side, at most :attr:`~.settings.PolishSettings.final_tile`), from the search's finest
+tiles as fine as the camera's pixels (:func:`final_tile`: a power of two by the ROI's side,
+nearest it or the smallest at least it as :attr:`~.settings.PolishSettings.final_tile_round`
+says, at most :attr:`~.settings.PolishSettings.final_tile`), from the search's finest
 rung down :attr:`~.settings.PolishSettings.final_levels` finer ones (each halves every
 step), :attr:`~.settings.PolishSettings.final_passes` times (each climb from that rung again,
 on the frame observed around the pose the last climb left; one climb stops long before it
@@ -32,12 +33,16 @@ from .loop import stream_poses
 SMALLEST_TILE = 64
 
 
-def final_tile(roi_size: float, largest: int, smallest: int = SMALLEST_TILE) -> int:
-    """The tile side (pixels) for a square ROI of ``roi_size`` camera pixels: the power of
-    two nearest it (in log scale), within ``[smallest, largest]``."""
+def final_tile(roi_size: float, largest: int, smallest: int = SMALLEST_TILE,
+               rounding: str = "nearest") -> int:
+    """The tile side (pixels) for a square ROI of ``roi_size`` camera pixels, within
+    ``[smallest, largest]``: the power of two nearest it in log scale (``rounding``
+    ``"nearest"``) or the smallest at least it (``"up"``: no camera pixel shares a tile
+    pixel with another, e.g. an SR4000 person of 150 pixels on 256 rather than 128)."""
     if not np.isfinite(roi_size) or roi_size <= 0:
         return int(smallest)
-    tile = 2 ** int(round(math.log2(float(roi_size))))
+    exponent = math.log2(float(roi_size))
+    tile = 2 ** int(math.ceil(exponent) if rounding == "up" else round(exponent))
     return int(min(max(tile, smallest), largest))
 
 
@@ -110,7 +115,8 @@ class FinalPolish:
         frame, _ = observe(depth, foreground, t.camera, s, floor=t.state.floor,
                            predicted_joints=np.asarray(t.body.joint_positions(pose)),
                            predicted_silhouette=t.renderers.silhouette(pose))
-        renderer = self._renderer(final_tile(frame.roi[2], s.polish.final_tile))
+        renderer = self._renderer(final_tile(frame.roi[2], s.polish.final_tile,
+                                             rounding=s.polish.final_tile_round))
         renderer.set_observation(frame.observed, roi=frame.roi)
         energy = t._energy(frame).on(renderer)
         return self.climber.climb(pose, energy, level_offset=s.search.levels - 1).pose

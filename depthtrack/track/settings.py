@@ -255,6 +255,10 @@ class AssociateSettings:
         _positive(self, "max_correspondences", "refine_level", "accept_margin", allow_zero=True)
 
 
+#: How the final polish's tile follows the ROI's side (:func:`.final_polish.final_tile`).
+TILE_ROUNDINGS = ("nearest", "up")
+
+
 @dataclass(frozen=True)
 class PolishSettings:
     """Polish: the finest rung of the search once more at a finer tile resolution, and the
@@ -269,7 +273,13 @@ class PolishSettings:
     final_tile : int
         Largest tile side (pixels) of the final polish: each pose, once no correction can
         change it any more, climbed again without the motion prior on tiles as fine as the
-        camera's own pixels (the power of two nearest the ROI's side, at most this); 0 = none.
+        camera's own pixels (a power of two by the ROI's side, as ``final_tile_round``
+        says, at most this); 0 = none.
+    final_tile_round : {"nearest", "up"}
+        How the final polish's tile follows the ROI's side: the power of two nearest it
+        (in log scale; the default before 2026-12-01), or the smallest at least it (one
+        tile pixel per camera pixel or finer: an SR4000 person on 256 rather than 128;
+        README "Final polish, at every camera pixel").
     final_levels : int
         Rungs the final polish adds below the search's finest (each halves the steps).
     final_iterations : int
@@ -288,6 +298,7 @@ class PolishSettings:
     final_levels: int = 2
     final_iterations: int = 4
     final_passes: int = 3
+    final_tile_round: str = "up"
 
     def __post_init__(self):
         _power_of_two(self.fine_tile, "fine_tile", zero_ok=True)
@@ -296,6 +307,7 @@ class PolishSettings:
         _check(isinstance(self.final_passes, int) and not isinstance(self.final_passes, bool),
                f"PolishSettings.final_passes must be a whole number, not {self.final_passes!r}")
         _positive(self, "final_levels", allow_zero=True)
+        _one_of(self, "final_tile_round", TILE_ROUNDINGS)
 
 
 #: Group name -> settings class, in the order of a frame.
