@@ -98,25 +98,39 @@ def test_settings_check_the_final_passes():
             TrackerSettings().updated({"polish": {"final_passes": bad}})
 
 
-def test_each_further_climb_lays_the_body_closer(squat12):
-    """``final_passes``: two passes are exactly one final polish applied twice, and from
-    poses a few centimetres off (the true poses nudged) three passes leave less of the
-    person unexplained, with a better silhouette, than one."""
-    from depthtrack.detect import segment_foreground
-    from depthtrack.evaluate.fit import frame_fit
-    from depthtrack.render import FrameRenderer
-    from depthtrack.track.final_polish import FinalPolish
-
-    seq = squat12
-    body = BodyModel.default(height=1.75)
-    rng = np.random.default_rng(5)
-    frames = (0, 5, 10)
+def _nudged_true_poses(seq, body, frames, seed):
+    """``{frame: pose (48,)}``: the true poses a few centimetres off."""
+    rng = np.random.default_rng(seed)
     starts = {}
     for i in frames:
         x = fit_pose_to_joints(body, seq.joints[i])
         x[:3] += rng.normal(0.0, 0.02, 3)           # the pelvis 2 cm off
         x[3:] += rng.normal(0.0, 0.06, len(x) - 3)  # every rotation a few degrees off
         starts[i] = body.clip(x[None])[0]
+    return starts
+
+
+def _mean_fit(seq, body, poses):
+    """``(IoU, unexplained)`` of ``{frame: pose}``, means over the frames."""
+    from depthtrack.detect import segment_foreground
+    from depthtrack.evaluate.fit import frame_fit
+    from depthtrack.render import FrameRenderer
+
+    with FrameRenderer(seq.camera) as renderer:
+        return np.mean([frame_fit(segment_foreground(seq.depth(i), seq.camera).mask, seq.depth(i),
+                                  renderer.render(body, x))[:2] for i, x in poses.items()], axis=0)
+
+
+def test_each_further_climb_lays_the_body_closer(squat12):
+    """``final_passes``: two passes are exactly one final polish applied twice, and from
+    poses a few centimetres off (the true poses nudged) three passes leave less of the
+    person unexplained, with a better silhouette, than one."""
+    from depthtrack.track.final_polish import FinalPolish
+
+    seq = squat12
+    body = BodyModel.default(height=1.75)
+    frames = (0, 5, 10)
+    starts = _nudged_true_poses(seq, body, frames, seed=5)
     polished = {}
     for passes in (1, 2, 3):
         settings = TrackerSettings().updated({"polish": {"final_passes": passes}})
@@ -127,13 +141,7 @@ def test_each_further_climb_lays_the_body_closer(squat12):
                     twice = {i: polish(seq.depth(i), polished[1][i]) for i in frames}
     for i in frames:
         np.testing.assert_array_equal(twice[i], polished[2][i])
-    figures = {}
-    with FrameRenderer(seq.camera) as renderer:
-        for passes, poses in polished.items():
-            figures[passes] = np.mean(
-                [frame_fit(segment_foreground(seq.depth(i), seq.camera).mask, seq.depth(i),
-                           renderer.render(body, poses[i]))[:2] for i in frames], axis=0)
-    (iou1, unexplained1), (iou3, unexplained3) = figures[1], figures[3]
+    (iou1, unexplained1), (iou3, unexplained3) = (_mean_fit(seq, body, polished[k]) for k in (1, 3))
     assert unexplained3 < unexplained1 and iou3 > iou1
 
 
@@ -141,21 +149,11 @@ def test_the_tile_rounded_up_renders_every_camera_pixel(squat12):
     """On the SR4000 squat (a person box of 100 to 180 pixels) the final polish renders on
     128-pixel tiles by the nearest rule, and on 256 by ``final_tile_round`` "up" wherever
     the box is over 128; from nudged true poses the finer tiles fit the person better."""
-    from depthtrack.detect import segment_foreground
-    from depthtrack.evaluate.fit import frame_fit
-    from depthtrack.render import FrameRenderer
     from depthtrack.track.final_polish import FinalPolish
 
     seq = squat12
     body = BodyModel.default(height=1.75)
-    rng = np.random.default_rng(11)
-    frames = (0, 4, 8, 11)
-    starts = {}
-    for i in frames:
-        x = fit_pose_to_joints(body, seq.joints[i])
-        x[:3] += rng.normal(0.0, 0.02, 3)
-        x[3:] += rng.normal(0.0, 0.06, len(x) - 3)
-        starts[i] = body.clip(x[None])[0]
+    starts = _nudged_true_poses(seq, body, (0, 4, 8, 11), seed=11)
     polished, tiles = {}, {}
     for rounding in ("nearest", "up"):
         settings = TrackerSettings().updated({"polish": {"final_tile_round": rounding}})
@@ -164,11 +162,6 @@ def test_the_tile_rounded_up_renders_every_camera_pixel(squat12):
                 polished[rounding] = {i: polish(seq.depth(i), x) for i, x in starts.items()}
                 tiles[rounding] = sorted(polish._renderers)
     assert tiles["nearest"] == [128] and 256 in tiles["up"]
-    figures = {}
-    with FrameRenderer(seq.camera) as renderer:
-        for rounding, poses in polished.items():
-            figures[rounding] = np.mean(
-                [frame_fit(segment_foreground(seq.depth(i), seq.camera).mask, seq.depth(i),
-                           renderer.render(body, poses[i]))[:2] for i in frames], axis=0)
-    print(figures)
-    assert figures["up"][0] > figures["nearest"][0] and figures["up"][1] < figures["nearest"][1]
+    (iou_near, unexplained_near), (iou_up, unexplained_up) = (
+        _mean_fit(seq, body, polished[k]) for k in ("nearest", "up"))
+    assert iou_up > iou_near and unexplained_up < unexplained_near
