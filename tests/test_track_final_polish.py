@@ -29,6 +29,8 @@ def test_the_tile_rounded_up_holds_every_camera_pixel():
                                                                   128, 64, 64]
     assert final_tile(100, 128, rounding="up") == 128 and final_tile(100, 64, rounding="up") == 64
     assert [final_tile(r, 256, rounding="nearest") for r in (130, 180)] == [128, 128]
+    with pytest.raises(ValueError, match="rounding"):
+        final_tile(130, 256, rounding="ceil")
 
 
 def test_settings_check_the_final_polish():

@@ -28,6 +28,7 @@ import numpy as np
 
 from .observe import as_depth, observe
 from .loop import stream_poses
+from .settings import TILE_ROUNDINGS
 
 #: The smallest tile the final polish uses (pixels): the search's own.
 SMALLEST_TILE = 64
@@ -39,6 +40,8 @@ def final_tile(roi_size: float, largest: int, smallest: int = SMALLEST_TILE,
     ``[smallest, largest]``: the power of two nearest it in log scale (``rounding``
     ``"nearest"``) or the smallest at least it (``"up"``: no camera pixel shares a tile
     pixel with another, e.g. an SR4000 person of 150 pixels on 256 rather than 128)."""
+    if rounding not in TILE_ROUNDINGS:
+        raise ValueError(f"rounding must be one of {TILE_ROUNDINGS}, not {rounding!r}")
     if not np.isfinite(roi_size) or roi_size <= 0:
         return int(smallest)
     exponent = math.log2(float(roi_size))
