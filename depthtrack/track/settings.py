@@ -147,6 +147,10 @@ class EnergySettings:
         pose (0 = off). Not in the paper: where a limb is hidden the likelihood is flat and
         the search would let it drift into any pose; this keeps it plausible while costing
         a visible limb almost nothing (a 1.5 rad bend costs 1.1, a mismatched pixel 1).
+        0.5 was tried on dev for the hidden far arm of a side view (2026-12-01): +1.4
+        points on the 27 off-front parity tracks, but -0.5 over 69 dev tracks, one tracked
+        back to front from the start; not adopted (README, "A stronger pose prior, for the
+        hidden far arm").
     twist_std : float
         Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
         (:func:`~.energy.spine_twist`; 0 = off; default 0.3, about 17 degrees, between the
