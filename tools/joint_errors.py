@@ -27,6 +27,7 @@ sys.path.insert(0, str(REPO))
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.evaluate.joint_view import elbow_offsets, hidden_joints, trunk_penetration  # noqa: E402
+from depthtrack.evaluate.metrics import fraction_within, joint_errors  # noqa: E402
 from depthtrack.io.atomic import write_text_atomic  # noqa: E402
 from depthtrack.io.sequence import open_sequence  # noqa: E402
 from depthtrack.io.track_output import read_track  # noqa: E402
@@ -44,21 +45,20 @@ def track_view(seq_dir, track_dir) -> dict:
     n = min(len(tracked), len(seq.joints))
     truth = np.asarray(seq.joints, dtype=np.float64)[:n]
     tracked = tracked[:n]
-    err = np.linalg.norm(tracked - truth, axis=-1)                          # (F, 15)
+    # as ``depthtrack eval`` scores them: a frame the tracker gave no pose is a miss
+    err = joint_errors(tracked, truth)                                      # (F, 15)
     hidden = np.array([hidden_joints(seq.depth(f), seq.camera, truth[f]) for f in range(n)])
-    known = np.isfinite(err)
-    within = np.where(known, err < 0.10, False).sum(0) / np.maximum(known.sum(0), 1)
+    ok = np.all(np.isfinite(tracked), axis=(1, 2))                          # frames with a pose
     elbows = {}
     for side in "lr":
-        seen = hidden[:, JOINT_NAMES.index(f"{side}_elbow")] & np.all(np.isfinite(tracked), axis=(1, 2))
+        seen = hidden[:, JOINT_NAMES.index(f"{side}_elbow")] & ok
         if seen.any():
             elbows[side] = {"frames_hidden": int(seen.sum()),
                             "true_m": np.round(elbow_offsets(truth[seen], side).mean(0), 3).tolist(),
                             "tracked_m": np.round(elbow_offsets(tracked[seen], side).mean(0), 3).tolist()}
-    ok = np.all(np.isfinite(tracked), axis=(1, 2))
     return {"sequence": str(seq_dir), "track": str(track_dir), "frames": int(n),
-            "within_10cm": float(np.mean(err[known] < 0.10)),
-            "joints": {name: {"within_10cm": round(float(within[j]), 3),
+            "within_10cm": fraction_within(err),
+            "joints": {name: {"within_10cm": round(fraction_within(err[:, j]), 3),
                               "hidden_share": round(float(hidden[:, j].mean()), 3)}
                        for j, name in enumerate(JOINT_NAMES)},
             "elbows_when_hidden": elbows,
