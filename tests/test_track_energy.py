@@ -51,3 +51,129 @@ def test_twist_prior_adds_its_gaussian_term_to_the_energy():
                                    0.5 * (np.array([0.0, 0.3, -0.6]) / 0.2) ** 2, rtol=1e-6)
     finally:
         renderer.release()
+
+
+def test_pose_prior_takes_the_hidden_std_on_the_hidden_joints_only():
+    """Closed forms: ``0.5 * sum((x_j / std)^2)`` over the joint rotations, the root free;
+    the listed joints at their own std; a std of 0 drops its terms."""
+    from depthtrack.body.skeleton import JOINT_ID
+    from depthtrack.track.energy import pose_prior
+
+    rng = np.random.default_rng(3)
+    poses = rng.normal(size=(4, 48))
+    joints = poses[:, 6:].reshape(4, 14, 3)
+    per_joint = np.sum(joints ** 2, axis=2)                         # (4, 14), joints 1..14
+    np.testing.assert_allclose(pose_prior(poses, 2.0), 0.5 * per_joint.sum(1) / 4.0)
+    poses_moved = poses.copy()
+    poses_moved[:, :6] += 5.0                                       # the root costs nothing
+    np.testing.assert_allclose(pose_prior(poses_moved, 2.0), pose_prior(poses, 2.0))
+    arm = [JOINT_ID[n] for n in ("l_shoulder", "l_elbow", "l_wrist")]
+    expected = 0.5 * per_joint.sum(1) / 4.0 + 0.5 * per_joint[:, np.array(arm) - 1].sum(1) * (
+        1.0 / 0.25 - 1.0 / 4.0)
+    np.testing.assert_allclose(pose_prior(poses, 2.0, arm, 0.5), expected)
+    np.testing.assert_allclose(pose_prior(poses, 0.0, arm, 0.5),
+                               0.5 * per_joint[:, np.array(arm) - 1].sum(1) / 0.25)
+    np.testing.assert_allclose(pose_prior(poses, 2.0, arm, 0.0),
+                               0.5 * np.delete(per_joint, np.array(arm) - 1, axis=1).sum(1) / 4.0)
+    assert pose_prior(poses[0], 1.0).shape == (1,)
+
+
+def _side_view_frame(tracker, pose):
+    """The depth of ``pose`` rendered by the tracker's own full-image renderer, observed."""
+    from types import SimpleNamespace
+
+    from depthtrack.track.state import TrackingState
+
+    depth = tracker.renderers.depth(pose).astype(np.float32)
+    mask = depth > 0
+    foreground = SimpleNamespace(mask=mask, points=tracker.camera.backproject(depth)[mask],
+                                 floor_plane=None)
+    frame, _ = tracker._observe(TrackingState(), depth, foreground=foreground)
+    return frame
+
+
+def test_the_far_arm_of_a_side_view_takes_the_hidden_prior():
+    """From the side the far arm hangs behind the body: :meth:`Tracker.hidden_joints` lists
+    its three joints (and no joint of the near arm), from the front none of the arms; the
+    energy of a frame then charges that arm's rotations at ``hidden_prior_std``, only with
+    the setting on and a pose to look from."""
+    from depthtrack.body.model import BodyModel
+    from depthtrack.camera import Camera
+    from depthtrack.body.skeleton import JOINT_ID
+    from depthtrack.track.energy import pose_prior
+    from depthtrack.track.tracker import Tracker, TrackerSettings
+
+    body = BodyModel.default(1.75)
+    camera = Camera.preset("sr4000")
+    settings = TrackerSettings(energy={"hidden_prior_std": 0.4})
+    with Tracker(body, camera, settings=settings) as tracker:
+        side = np.zeros(48)
+        side[2] = 3.0
+        side[4] = np.pi / 2                                        # pelvis ry: side on
+        frame = _side_view_frame(tracker, side)
+        hidden = tracker.hidden_joints(frame, side)
+        z = body.joint_positions(side)[:, 2]
+        far = "l" if z[JOINT_ID["l_shoulder"]] > z[JOINT_ID["r_shoulder"]] else "r"
+        near = "r" if far == "l" else "l"
+        far_arm = {JOINT_ID[f"{far}_{j}"] for j in ("shoulder", "elbow", "wrist")}
+        assert far_arm <= set(hidden)
+        assert not {JOINT_ID[f"{near}_{j}"] for j in ("shoulder", "elbow", "wrist")} & set(hidden)
+        assert tracker.counts["hidden_limbs"] >= 1
+        energy = tracker._energy(frame, hidden_of=side)
+        assert energy.hidden_joints == tuple(hidden) and energy.hidden_prior_std == 0.4
+        bent = side.copy()
+        bent[3 + 3 * JOINT_ID[f"{far}_elbow"]] = -1.0                # the far elbow flexed
+        np.testing.assert_allclose(energy(np.stack([bent]))[0] - energy.one(side),
+                                   pose_prior(bent, 1.0, hidden, 0.4)[0]
+                                   - pose_prior(side, 1.0, hidden, 0.4)[0]
+                                   + (energy.likelihood(bent) - energy.likelihood(side)),
+                                   rtol=1e-6)
+        assert tracker._energy(frame).hidden_joints == ()            # no pose to look from
+        front = side.copy()
+        front[4] = 0.0
+        frame = _side_view_frame(tracker, front)
+        hidden = set(tracker.hidden_joints(frame, front))
+        assert not hidden & {JOINT_ID[f"{s}_{j}"] for s in "lr" for j in ("elbow", "wrist")}
+    # at a share of 5 % the far foot, of which a few pixels show, lists the far leg too;
+    # with hidden_prior_limbs "arms" only the arm is charged
+    for limbs, legs in (("all", True), ("arms", False)):
+        looser = TrackerSettings(energy={"hidden_prior_std": 0.4, "hidden_prior_limbs": limbs},
+                                 heading={"reseat_hidden": 0.05})
+        with Tracker(body, camera, settings=looser) as tracker:
+            hidden = set(tracker.hidden_joints(_side_view_frame(tracker, side), side))
+            assert far_arm <= hidden
+            far_leg = {JOINT_ID[f"{far}_{j}"] for j in ("hip", "knee", "ankle")}
+            assert (far_leg <= hidden) == legs and (not far_leg & hidden) == (not legs)
+    with Tracker(body, camera) as tracker:                           # off by default
+        assert tracker._energy(_side_view_frame(tracker, side), hidden_of=side).hidden_joints == ()
+
+
+def test_tracking_a_side_view_searches_the_far_arm_under_the_hidden_prior():
+    """Wired in: each tracked frame of a side view charges its far arm (``hidden_limbs``
+    counts one limb a frame), and the tracked far elbow stays where it hangs; with the
+    setting off nothing is counted."""
+    from types import SimpleNamespace
+
+    from depthtrack.body.model import BodyModel
+    from depthtrack.camera import Camera
+    from depthtrack.track.tracker import Tracker, TrackerSettings
+
+    def segment(depth, camera):
+        mask = depth > 0
+        return SimpleNamespace(mask=mask, points=camera.backproject(depth)[mask], floor_plane=None)
+
+    body = BodyModel.default(1.75)
+    camera = Camera.preset("sr4000")
+    side = np.zeros(48)
+    side[2] = 3.0
+    side[4] = np.pi / 2
+    for std, counted in ((0.5, 3), (0.0, 0)):
+        settings = TrackerSettings(energy={"hidden_prior_std": std})
+        with Tracker(body, camera, method="hc", settings=settings, segmenter=segment) as tracker:
+            depth = tracker.renderers.depth(side).astype(np.float32)
+            tracker.init(depth, pose=side)
+            for _ in range(3):
+                x = tracker.step(depth)
+            assert tracker.counts["hidden_limbs"] == counted
+            err = np.linalg.norm(body.joint_positions(x) - body.joint_positions(side), axis=1)
+            assert err.max() < 0.1

@@ -77,44 +77,79 @@ def spread(points, k):
     return np.array(picked)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def train_run(argv, description: str, output: str, extra):
+    """``(args, files, samples)`` for this tool or ``make_limb_prior.py``: ``argv`` parsed
+    (:func:`tool_arguments`) and the train clips' limb samples (:func:`train_samples`); None
+    when a train clip is missing (said on stderr)."""
+    args = tool_arguments(argv, description, output, extra)
+    found = train_samples(f"make_{Path(output).stem}", args.data, args.fps)
+    return None if found is None else (args, *found)
+
+
+def tool_arguments(argv, description: str, output: str, extra):
+    """The arguments this tool and ``make_limb_prior.py`` share: ``--data``, ``-o`` (default
+    ``depthtrack/data/OUTPUT``), ``--fps``, ``--seed``, and ``extra`` (``(flag, default)``,
+    an int), parsed from ``argv``."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data"))
-    parser.add_argument("-o", "--output", default=str(REPO / "depthtrack" / "data" / "limb_poses.npz"))
-    parser.add_argument("--clusters", type=int, default=32)
+    parser.add_argument("-o", "--output", default=str(REPO / "depthtrack" / "data" / output))
     parser.add_argument("--fps", type=float, default=10.0)
     parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args(argv)
-    try:
-        files = present_train_clips(args.data)
-    except FileNotFoundError as exc:
-        print(f"make_limb_poses: {exc}", file=sys.stderr)
-        return 2
-    body = BodyModel.default()
+    parser.add_argument(extra[0], type=int, default=extra[1])
+    return parser.parse_args(argv)
+
+
+def samples_of(files, body, fps, verbose: bool = False) -> dict:
+    """``{"arm": (M, 6), "leg": (M, 6)}``: :func:`limb_samples` of every frame of the BVH
+    ``files``, retargeted onto ``body`` at ``fps``."""
     samples = {"arm": [], "leg": []}
     for f in files:
-        poses, _, _ = clip_poses(f, body, args.fps)
+        poses, _, _ = clip_poses(f, body, fps)
         for kind, s in limb_samples(poses).items():
             samples[kind].append(s)
-        print(f"{f.name}: {len(poses)} frames at {args.fps:g} Hz")
+        if verbose:
+            print(f"{f.name}: {len(poses)} frames at {fps:g} Hz")
+    return {kind: np.concatenate(parts) for kind, parts in samples.items()}
+
+
+def train_samples(tool: str, data_dir, fps):
+    """``(files, samples)`` of the train clips under ``data_dir`` (:func:`samples_of`), or
+    None when one is missing (the line naming them printed, prefixed by ``tool``)."""
+    try:
+        files = present_train_clips(data_dir)
+    except FileNotFoundError as exc:
+        print(f"{tool}: {exc}", file=sys.stderr)
+        return None
+    return files, samples_of(files, BodyModel.default(), fps, verbose=True)
+
+
+def write_npz(path, arrays: dict, files, about: str) -> None:
+    """``arrays`` with the train ``files``' names and ``about``, written atomically."""
+    buf = io.BytesIO()
+    np.savez(buf, **arrays, clips=np.array([f.name for f in files]), about=np.array(about))
+    write_bytes_atomic(path, buf.getvalue())
+    print(f"wrote {path}")
+
+
+def main(argv=None) -> int:
+    run = train_run(argv, __doc__.split("\n\n")[0], "limb_poses.npz", ("--clusters", 32))
+    if run is None:
+        return 2
+    args, files, samples = run
+    body = BodyModel.default()
     rng = np.random.default_rng(args.seed)
     out = {}
-    for kind, parts in samples.items():
-        data = np.concatenate(parts)
+    for kind, data in samples.items():
         centres, labels = kmeans2(data, 4 * args.clusters, minit="++", seed=rng)
         counts = np.bincount(labels, minlength=len(centres))
         centres = centres[counts > 0]
         picked = spread(limb_points(body, kind, centres), args.clusters)
         out[kind] = centres[picked]
         print(f"{kind}: {len(data)} samples -> {len(centres)} clusters -> {len(picked)} spread")
-    buf = io.BytesIO()
-    np.savez(buf, arm=out["arm"], leg=out["leg"],
-             clips=np.array([f.name for f in files]),
-             about=np.array("left-limb (shoulder, elbow) and (hip, knee) rotation vectors: "
-                            "k-means centres of the train clips' frames, spread by farthest-"
-                            "point sampling of the limb's joints; made by tools/make_limb_poses.py"))
-    write_bytes_atomic(args.output, buf.getvalue())
-    print(f"wrote {args.output}")
+    write_npz(args.output, {"arm": out["arm"], "leg": out["leg"]}, files,
+              "left-limb (shoulder, elbow) and (hip, knee) rotation vectors: "
+              "k-means centres of the train clips' frames, spread by farthest-"
+              "point sampling of the limb's joints; made by tools/make_limb_poses.py")
     return 0
 
 

@@ -3,7 +3,7 @@
 MAP energy of a candidate pose ``x`` with velocity ``v = x (-) x_{t-1}``::
 
     E(x) = w * A * mean_tile_cost(x) + 0.5 * sum(((v - v_pred) / sigma)^2)
-                                     + 0.5 * sum((x_joints / pose_prior_std)^2)
+                                     + 0.5 * sum((x_joints / std_joints)^2)
                                      + 0.5 * (spine_twist(x) / twist_std)^2
 
 ``mean_tile_cost`` is :meth:`TileRenderer.costs` (smoothed or pixel likelihood, each pixel's
@@ -12,7 +12,11 @@ the negative log-likelihood summed over the camera pixels the tile covers, and
 ``w = likelihood_weight`` (1 = pixels independent, as in the paper's model); the second term
 is ``-log p(v_t | v_{t-1})`` of :class:`~depthtrack.motion.prior.ConstantVelocityPrior` (only
 while tracking: :meth:`Energy.with_prior`); the third a weak pose prior on the joint
-rotations (:attr:`EnergySettings.pose_prior_std`, our addition for hidden limbs); the fourth
+rotations (``std_joints``: :attr:`EnergySettings.pose_prior_std`, our addition for hidden
+limbs, and :attr:`EnergySettings.hidden_prior_std` on the joints of the limbs the frame's
+predicted pose shows hidden: :meth:`Energy.with_hidden`, :func:`pose_prior`; with
+:attr:`EnergySettings.limb_prior` the limbs' root and middle joints are scored by the
+learned :mod:`.limb_prior` instead); the fourth
 a prior on the trunk's twist (:func:`spine_twist`, :attr:`EnergySettings.twist_std`, also
 ours): the likelihood barely sees which way the pelvis points under a chest and legs that
 it does see, and a turning track left its pelvis 30 to 70 degrees behind the chest, the hip
@@ -36,6 +40,24 @@ from ..likelihood import fixed_and_empty_costs
 #: Parameters of the spine's rotation vector in a pose (the chest against the pelvis),
 #: from the skeleton's joint order (joint j's rotation is ``3 + 3j .. 5 + 3j``).
 SPINE_ROTATION = slice(3 + 3 * JOINT_ID["spine"], 6 + 3 * JOINT_ID["spine"])
+
+
+def pose_prior(poses, std: float, hidden_joints=(), hidden_std: float = 0.0,
+               dropped_joints=()) -> np.ndarray:
+    """``(N,)`` the pose prior ``0.5 * sum((x_j / std_j)^2)`` over the joint rotations
+    ``x_j`` of ``poses (N, 48)`` (parameters 6..47; the root's translation and rotation are
+    free), ``std_j`` = ``std`` except on the joints listed in ``hidden_joints`` (indices into
+    the skeleton's joints, >= 1), where it is ``hidden_std``. A std of 0 drops its terms;
+    so do ``dropped_joints`` (those another term scores: :mod:`.limb_prior`), unless hidden."""
+    poses = np.atleast_2d(np.asarray(poses, dtype=np.float64))
+    joints = poses[:, 6:].reshape(len(poses), -1, 3)                  # (N, 14, 3): joints 1..14
+    precision = np.full(joints.shape[1], 0.0 if std <= 0 else 1.0 / std ** 2)
+    if dropped_joints:
+        precision[np.asarray(dropped_joints, dtype=np.int64) - 1] = 0.0
+    if hidden_joints:
+        precision[np.asarray(hidden_joints, dtype=np.int64) - 1] = (
+            0.0 if hidden_std <= 0 else 1.0 / hidden_std ** 2)
+    return 0.5 * np.einsum("nj,j->n", np.sum(joints ** 2, axis=2), precision)
 
 
 def spine_twist(poses) -> np.ndarray:
@@ -74,6 +96,13 @@ class Energy:
     pose_prior_std : float
     twist_std : float
         Standard deviation (rad) of the trunk-twist prior (0 = off).
+    hidden_joints : tuple of int
+        Joints (skeleton indices) whose rotations take ``hidden_prior_std`` instead of
+        ``pose_prior_std`` (:meth:`with_hidden`); empty = none.
+    hidden_prior_std : float
+    limb_prior : LimbPrior or None
+        The learned limb prior (:class:`.limb_prior.LimbPrior`): scores the rotations of
+        its ``joints`` in place of the Gaussian; None = off.
     prior : ConstantVelocityPrior or None
         With ``previous (48,)`` and ``v_pred (48,)``: the motion-prior term; None = off.
     """
@@ -87,6 +116,20 @@ class Energy:
     prior: object = None
     previous: np.ndarray | None = None
     v_pred: np.ndarray | None = None
+    hidden_joints: tuple = ()
+    hidden_prior_std: float = 0.0
+    limb_prior: object = None
+
+    def with_limb_prior(self, limb_prior) -> "Energy":
+        """The same energy with the learned limb prior (:mod:`.limb_prior`) on its joints."""
+        return dataclasses.replace(self, limb_prior=limb_prior)
+
+    def with_hidden(self, joints, std: float) -> "Energy":
+        """The same energy with the pose prior's std ``std`` on the rotations of ``joints``
+        (skeleton indices): the limbs a frame shows hidden (:attr:`EnergySettings.
+        hidden_prior_std`)."""
+        return dataclasses.replace(self, hidden_joints=tuple(int(j) for j in joints),
+                                   hidden_prior_std=float(std))
 
     def with_prior(self, prior, previous, v_pred) -> "Energy":
         return dataclasses.replace(self, prior=prior, previous=previous, v_pred=v_pred)
@@ -115,8 +158,12 @@ class Energy:
         e = self.weight * self.likelihood_costs(poses)
         if self.prior is not None:
             e = e + self.prior.penalty(poses, self.previous, self.v_pred)
-        if self.pose_prior_std > 0:
-            e = e + 0.5 * np.sum((poses[:, 6:] / self.pose_prior_std) ** 2, axis=1)
+        learned = self.limb_prior
+        if self.pose_prior_std > 0 or self.hidden_joints:
+            e = e + pose_prior(poses, self.pose_prior_std, self.hidden_joints,
+                               self.hidden_prior_std, learned.joints if learned else ())
+        if learned is not None:
+            e = e + learned.cost(poses)
         if self.twist_std > 0:
             e = e + 0.5 * (spine_twist(poses) / self.twist_std) ** 2
         return e

@@ -121,7 +121,7 @@ class FinalPolish:
         renderer = self._renderer(final_tile(frame.roi[2], s.polish.final_tile,
                                              rounding=s.polish.final_tile_round))
         renderer.set_observation(frame.observed, roi=frame.roi)
-        energy = t._energy(frame).on(renderer)
+        energy = t._energy(frame, hidden_of=pose).on(renderer)
         return self.climber.climb(pose, energy, level_offset=s.search.levels - 1).pose
 
 

@@ -15,10 +15,12 @@ STAGES = ("segment", "render", "detect", "evidence", "search", "association", "i
 #: Counters. ``correspondences`` / ``accepted`` count every correspondence the association
 #: tried / kept; ``proposal_correspondences`` / ``proposal_accepted`` those of them from the
 #: recogniser's joint proposals (``ProposalSettings.evidence``); ``looks_turned_away`` the
-#: fresh looks whose pose faced too far from the track's (``JudgeSettings.look_turn``).
+#: fresh looks whose pose faced too far from the track's (``JudgeSettings.look_turn``);
+#: ``hidden_limbs`` the limb-frames searched under the hidden-limb pose prior
+#: (``EnergySettings.hidden_prior_std``).
 COUNTS = ("candidates", "render_calls", "detections", "correspondences", "accepted",
           "recoveries_tried", "recoveries", "frames_without_person", "reinitialisations",
-          "proposal_correspondences", "proposal_accepted", "looks_turned_away")
+          "proposal_correspondences", "proposal_accepted", "looks_turned_away", "hidden_limbs")
 
 
 class Recorder:

@@ -151,6 +151,31 @@ class EnergySettings:
         points on the 27 off-front parity tracks, but -0.5 over 69 dev tracks, one tracked
         back to front from the start; not adopted (README, "A stronger pose prior, for the
         hidden far arm").
+    hidden_prior_std : float
+        Standard deviation (rad) of the pose prior on the rotations of the limbs the frame's
+        predicted pose shows hidden, in place of ``pose_prior_std`` there (0 = off, every
+        joint ``pose_prior_std``): a limb whose forearm and hand (shin and foot) show on
+        fewer than :attr:`HeadingSettings.reseat_hidden` of the person's pixels in the
+        predicted pose's render (:func:`.reach.hidden_limbs`; one full-image label render a
+        frame), its root, middle and end joints. The global 0.5 helped the far arm of a side
+        view but moved visible limbs and starts too; this asks it only where the image is
+        silent (while tracking and in the final polish, not at a start). 0.5 on dev
+        (2026-12-01), not adopted: a trap -- the prior pulls a hidden arm to the zero pose,
+        where it stays hidden, so a raised arm hidden for a few frames is held down for
+        good (105_05 from 90 degrees 98.5 -> 55.9 %; README, "The pose prior on the hidden
+        limbs only").
+    hidden_prior_limbs : {"all", "arms"}
+        Which hidden limbs take ``hidden_prior_std``: every limb, or the arms only (a far
+        leg hidden behind the near one still walks: a prior toward the standing pose bends
+        it wrong).
+    limb_prior : {"gaussian", "learned"}
+        How the pose prior scores each limb's root and middle joint (shoulder and elbow,
+        hip and knee): the Gaussian of ``pose_prior_std``, or the learned mixture of the
+        train motions' limb poses floored by that Gaussian (:mod:`.limb_prior`,
+        ``depthtrack/data/limb_prior.npz``): a common limb pose costs less than the
+        Gaussian says, an uncommon one at most ``log(1 / limb_prior_floor)`` more.
+    limb_prior_floor : float
+        The broad Gaussian's weight in the learned prior (0 < floor <= 1; 1 = the Gaussian).
     twist_std : float
         Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
         (:func:`~.energy.spine_twist`; 0 = off; default 0.3, about 17 degrees, between the
@@ -164,10 +189,22 @@ class EnergySettings:
     likelihood_weight: float = 1.0
     pose_prior_std: float = 1.0
     twist_std: float = 0.3
+    hidden_prior_std: float = 0.0
+    hidden_prior_limbs: str = "all"
+    limb_prior: str = "gaussian"
+    limb_prior_floor: float = 0.1
 
     def __post_init__(self):
+        _check(self.limb_prior in ("gaussian", "learned"),
+               f"limb_prior must be 'gaussian' or 'learned', not {self.limb_prior!r}")
+        _check(0.0 < self.limb_prior_floor <= 1.0,
+               f"limb_prior_floor must be in (0, 1], not {self.limb_prior_floor!r}")
+        _check(self.limb_prior == "gaussian" or self.pose_prior_std > 0,
+               "limb_prior 'learned' needs pose_prior_std above 0 (its floor's std)")
+        _check(self.hidden_prior_limbs in ("all", "arms"),
+               f"hidden_prior_limbs must be 'all' or 'arms', not {self.hidden_prior_limbs!r}")
         _positive(self, "damping", "likelihood_weight", "pose_prior_std", "twist_std",
-                  "prior_huber", allow_zero=True)
+                  "prior_huber", "hidden_prior_std", allow_zero=True)
 
 
 @dataclass(frozen=True)

@@ -48,7 +48,9 @@ from .heading import CHANNELS_CLEARED, due
 from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
-from .rechecks import recheck_stage, turned_start
+from .limb_prior import LimbPrior, load_mixtures
+from .reach import LIMBS
+from .rechecks import recheck_stage, tracked_hidden, turned_start
 from .record import Recorder
 from .renderers import RendererSet
 from .reseat import limb_climber, limb_library, reseat_limbs
@@ -183,10 +185,34 @@ class Tracker:
         self.renderers.upload(frame)
         return frame, state.replace(roi=frame.roi, floor=floor)
 
-    def _energy(self, frame) -> Energy:
-        """The energy of ``frame`` (uploaded) without the motion prior, on the coarse tiles."""
-        return Energy(self.renderers.coarse, frame.weight, self.smoothed, self.recorder,
-                      self.settings.energy.pose_prior_std, self.settings.energy.twist_std)
+    def _energy(self, frame, hidden_of=None) -> Energy:
+        """The energy of ``frame`` (uploaded) without the motion prior, on the coarse tiles.
+
+        With :attr:`EnergySettings.limb_prior` ``"learned"``: the learned limb prior
+        (:mod:`.limb_prior`) on the limbs. With ``hidden_of`` (a pose ``(48,)``) and :attr:`EnergySettings.hidden_prior_std`:
+        the pose prior of that std on the limbs ``hidden_of`` shows hidden on ``frame``
+        (:meth:`hidden_joints`)."""
+        s = self.settings.energy
+        energy = Energy(self.renderers.coarse, frame.weight, self.smoothed, self.recorder,
+                        s.pose_prior_std, s.twist_std)
+        if s.limb_prior == "learned":
+            energy = energy.with_limb_prior(
+                LimbPrior(load_mixtures(), s.pose_prior_std, s.limb_prior_floor))
+        if s.hidden_prior_std > 0 and hidden_of is not None:
+            energy = energy.with_hidden(self.hidden_joints(frame, hidden_of), s.hidden_prior_std)
+        return energy
+
+    def hidden_joints(self, frame, pose) -> list:
+        """The joints (skeleton indices) of the limbs ``pose (48,)`` shows hidden on ``frame``
+        (:func:`.rechecks.tracked_hidden`: its lower segment on fewer than
+        :attr:`HeadingSettings.reseat_hidden` of the person's pixels; only the arms with
+        :attr:`EnergySettings.hidden_prior_limbs` ``"arms"``); counted in ``hidden_limbs``."""
+        limbs = tracked_hidden(self, frame, self.renderers.labels(pose))
+        if self.settings.energy.hidden_prior_limbs == "arms":
+            limbs = {limb for limb in limbs if limb.endswith("_arm")}
+        self.recorder.count("hidden_limbs", len(limbs))
+        index = {n: i for i, n in enumerate(self.body.joint_names)}
+        return sorted(index[j] for limb in limbs for j in LIMBS[limb])
 
     @contextmanager
     def settings_overlaid(self, changes: dict):
@@ -276,7 +302,7 @@ class Tracker:
             return state.logged({"absent": True}, pose=None, absent=0,
                                 velocity=np.zeros(self.body.dof),
                                 frames_without_person=state.frames_without_person + 1), None, None
-        energy = self._energy(frame).with_prior(self.prior, x_prev, v_pred)
+        energy = self._energy(frame, hidden_of=x_pred).with_prior(self.prior, x_prev, v_pred)
         x, e = search(energy, self.climbers, s, self.recorder, x_pred, x_prev,
                       climb_it=self.method in ("hc", "hc+ep"))
         accepted = 0
