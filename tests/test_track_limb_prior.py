@@ -67,6 +67,12 @@ def test_a_limb_and_its_mirror_cost_the_same():
         mirrored[:, right] = pose[:, left] * MIRROR
     np.testing.assert_allclose(limb_prior_cost(pose, mixtures, 1.0, 0.1),
                                limb_prior_cost(mirrored, mixtures, 1.0, 0.1), rtol=1e-12)
+    # a weight interpolates between the Gaussian and the learned cost, limb by limb
+    gauss = pose_prior(pose, 1.0) - pose_prior(pose, 1.0, dropped_joints=LimbPrior(mixtures, 1.0, 0.1).joints)
+    learned = limb_prior_cost(pose, mixtures, 1.0, 0.1)
+    np.testing.assert_allclose(limb_prior_cost(pose, mixtures, 1.0, 0.1, 0.0), gauss, rtol=1e-12)
+    np.testing.assert_allclose(limb_prior_cost(pose, mixtures, 1.0, 0.1, 0.3),
+                               gauss + 0.3 * (learned - gauss), rtol=1e-12)
     # and it is the sum of the four limbs' own costs
     one = sum(floored_cost(pose[:, LIMB_SLOTS[f"{s}_{k}"]] * (MIRROR if s == "r" else 1),
                            mixtures[k], 1.0, 0.1) for s in "lr" for k in ("arm", "leg"))

@@ -104,11 +104,15 @@ class LimbPrior:
         The broad Gaussian's std (:attr:`EnergySettings.pose_prior_std`).
     floor : float
         :attr:`EnergySettings.limb_prior_floor`.
+    weight : float
+        :attr:`EnergySettings.limb_prior_weight`: how far from the Gaussian toward the
+        learned cost (0 = the Gaussian, 1 = the learned).
     """
 
     mixtures: dict
     std: float
     floor: float
+    weight: float = 1.0
 
     @property
     def joints(self) -> tuple:
@@ -119,17 +123,22 @@ class LimbPrior:
 
     def cost(self, poses) -> np.ndarray:
         """``(N,)`` the summed cost of the four limbs of ``poses (N, 48)``."""
-        return limb_prior_cost(poses, self.mixtures, self.std, self.floor)
+        return limb_prior_cost(poses, self.mixtures, self.std, self.floor, self.weight)
 
 
-def limb_prior_cost(poses, mixtures: dict, std: float, floor: float) -> np.ndarray:
+def limb_prior_cost(poses, mixtures: dict, std: float, floor: float,
+                    weight: float = 1.0) -> np.ndarray:
     """``(N,)`` :func:`floored_cost` summed over the four limbs of ``poses (N, 48)`` (a right
-    limb mirrored onto the left)."""
+    limb mirrored onto the left); with ``weight`` w, ``gauss + w * (cost - gauss)`` per limb
+    (``gauss = 0.5 |x|^2 / std^2``), at most ``gauss + w * log(1 / floor)``."""
     poses = np.atleast_2d(np.asarray(poses, dtype=np.float64))
     total = np.zeros(len(poses))
     for kind, (left, right) in KINDS.items():
         both = np.concatenate([poses[:, LIMB_SLOTS[left]], poses[:, LIMB_SLOTS[right]] * MIRROR])
         c = floored_cost(both, mixtures[kind], std, floor)
+        if weight != 1.0:
+            gauss = 0.5 * np.sum(both * both, axis=1) / std ** 2
+            c = gauss + weight * (c - gauss)
         total += c[:len(poses)] + c[len(poses):]
     return total
 

@@ -176,6 +176,10 @@ class EnergySettings:
         Gaussian says, an uncommon one at most ``log(1 / limb_prior_floor)`` more.
     limb_prior_floor : float
         The broad Gaussian's weight in the learned prior (0 < floor <= 1; 1 = the Gaussian).
+    limb_prior_weight : float
+        How far the learned prior goes from the Gaussian toward the learned cost, per limb
+        ``gauss + w * (learned - gauss)`` (0 = the Gaussian, 1 = the learned; >= 0): a
+        weaker pull toward the common limb poses.
     twist_std : float
         Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
         (:func:`~.energy.spine_twist`; 0 = off; default 0.3, about 17 degrees, between the
@@ -193,12 +197,14 @@ class EnergySettings:
     hidden_prior_limbs: str = "all"
     limb_prior: str = "gaussian"
     limb_prior_floor: float = 0.1
+    limb_prior_weight: float = 1.0
 
     def __post_init__(self):
         _check(self.limb_prior in ("gaussian", "learned"),
                f"limb_prior must be 'gaussian' or 'learned', not {self.limb_prior!r}")
         _check(0.0 < self.limb_prior_floor <= 1.0,
                f"limb_prior_floor must be in (0, 1], not {self.limb_prior_floor!r}")
+        _positive(self, "limb_prior_weight", allow_zero=True)
         _check(self.limb_prior == "gaussian" or self.pose_prior_std > 0,
                "limb_prior 'learned' needs pose_prior_std above 0 (its floor's std)")
         _check(self.hidden_prior_limbs in ("all", "arms"),

@@ -197,7 +197,8 @@ class Tracker:
                         s.pose_prior_std, s.twist_std)
         if s.limb_prior == "learned":
             energy = energy.with_limb_prior(
-                LimbPrior(load_mixtures(), s.pose_prior_std, s.limb_prior_floor))
+                LimbPrior(load_mixtures(), s.pose_prior_std, s.limb_prior_floor,
+                          s.limb_prior_weight))
         if s.hidden_prior_std > 0 and hidden_of is not None:
             energy = energy.with_hidden(self.hidden_joints(frame, hidden_of), s.hidden_prior_std)
         return energy
