@@ -174,12 +174,17 @@ class EnergySettings:
         train motions' limb poses floored by that Gaussian (:mod:`.limb_prior`,
         ``depthtrack/data/limb_prior.npz``): a common limb pose costs less than the
         Gaussian says, an uncommon one at most ``log(1 / limb_prior_floor)`` more.
+        "learned" on dev (2026-12-01): +2.0 points on the 27 off-front parity tracks (the
+        side view's far arm where the true one hangs), but a dancer's hidden arm held back
+        was tracked hanging in front (05_20 on Kinect v2 from 120 degrees 90.8 -> 69.5 %);
+        not adopted (README, "A learned limb prior").
     limb_prior_floor : float
         The broad Gaussian's weight in the learned prior (0 < floor <= 1; 1 = the Gaussian).
     limb_prior_weight : float
         How far the learned prior goes from the Gaussian toward the learned cost, per limb
         ``gauss + w * (learned - gauss)`` (0 = the Gaussian, 1 = the learned; >= 0): a
-        weaker pull toward the common limb poses.
+        weaker pull toward the common limb poses. 0.5 on dev, not adopted: one of the
+        first 8 parity tracks lost 11 points (README, "The learned limb prior, halfway").
     twist_std : float
         Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
         (:func:`~.energy.spine_twist`; 0 = off; default 0.3, about 17 degrees, between the
