@@ -29,7 +29,8 @@ def test_mixture_log_density_is_the_weighted_sum_of_its_gaussians():
     x = np.random.default_rng(1).normal(scale=0.7, size=(7, 6))
     expected = np.log(sum(w * multivariate_normal(mu, c).pdf(x)
                           for w, mu, c in zip(m.weights, m.means, m.covariances)))
-    np.testing.assert_allclose(mixture_log_density(x, m.weights, m.means, m.covariances),
+    np.testing.assert_allclose(mixture_log_density(x, m.weights, m.means,
+                                                   np.linalg.cholesky(m.covariances)),
                                expected, rtol=1e-10)
     np.testing.assert_allclose(m.log_density(x[0]), expected[:1], rtol=1e-10)
 

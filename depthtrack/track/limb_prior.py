@@ -37,6 +37,10 @@ from .reseat import LIMB_SLOTS, MIRROR
 
 #: The limb kinds and their limbs (the mixture of a kind serves both sides).
 KINDS = {"arm": ("l_arm", "r_arm"), "leg": ("l_leg", "r_leg")}
+#: The joints whose rotations the prior scores (skeleton indices): each limb's root and
+#: middle joint.
+PRIOR_JOINTS = tuple(sorted(JOINT_ID[j] for limbs in KINDS.values() for limb in limbs
+                            for j in LIMBS[limb][:2]))
 
 
 def prior_path() -> Path:
@@ -61,16 +65,20 @@ class Mixture:
     means: np.ndarray
     covariances: np.ndarray
 
+    def __post_init__(self):
+        # factored once: the energy asks for the density of every candidate batch
+        object.__setattr__(self, "cholesky", np.linalg.cholesky(self.covariances))
+
     def log_density(self, x) -> np.ndarray:
         """``(N,)`` ``log g(x)`` of ``x (N, D)``."""
-        return mixture_log_density(x, self.weights, self.means, self.covariances)
+        return mixture_log_density(x, self.weights, self.means, self.cholesky)
 
 
-def mixture_log_density(x, weights, means, covariances) -> np.ndarray:
-    """``(N,)`` log density of the Gaussian mixture (``weights (K,)``, ``means (K, D)``,
-    ``covariances (K, D, D)``) at ``x (N, D)``, by each component's Cholesky factor."""
+def mixture_log_density(x, weights, means, cholesky) -> np.ndarray:
+    """``(N,)`` log density of the Gaussian mixture (``weights (K,)``, ``means (K, D)``, the
+    covariances' lower Cholesky factors ``cholesky (K, D, D)``) at ``x (N, D)``."""
     x = np.atleast_2d(np.asarray(x, dtype=np.float64))
-    chol = np.linalg.cholesky(covariances)                                   # (K, D, D)
+    chol = np.asarray(cholesky, dtype=np.float64)                            # (K, D, D)
     d = x[None, :, :] - means[:, None, :]                                    # (K, N, D)
     z = np.linalg.solve(chol[:, None], d[..., None])[..., 0]                 # (K, N, D)
     log_det = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)   # (K,)
@@ -116,10 +124,8 @@ class LimbPrior:
 
     @property
     def joints(self) -> tuple:
-        """The joints whose rotations this prior scores (skeleton indices): each limb's
-        root and middle joint; the energy's Gaussian leaves them to it."""
-        return tuple(sorted(JOINT_ID[j] for limbs in KINDS.values() for limb in limbs
-                            for j in LIMBS[limb][:2]))
+        """:data:`PRIOR_JOINTS`: the energy's Gaussian leaves them to this prior."""
+        return PRIOR_JOINTS
 
     def cost(self, poses) -> np.ndarray:
         """``(N,)`` the summed cost of the four limbs of ``poses (N, 48)``."""

@@ -189,9 +189,9 @@ class Tracker:
         """The energy of ``frame`` (uploaded) without the motion prior, on the coarse tiles.
 
         With :attr:`EnergySettings.limb_prior` ``"learned"``: the learned limb prior
-        (:mod:`.limb_prior`) on the limbs. With ``hidden_of`` (a pose ``(48,)``) and :attr:`EnergySettings.hidden_prior_std`:
-        the pose prior of that std on the limbs ``hidden_of`` shows hidden on ``frame``
-        (:meth:`hidden_joints`)."""
+        (:mod:`.limb_prior`) on the limbs. With ``hidden_of`` (a pose ``(48,)``) and
+        :attr:`EnergySettings.hidden_prior_std`: the pose prior of that std on the limbs
+        ``hidden_of`` shows hidden on ``frame`` (:meth:`hidden_joints`)."""
         s = self.settings.energy
         energy = Energy(self.renderers.coarse, frame.weight, self.smoothed, self.recorder,
                         s.pose_prior_std, s.twist_std)
