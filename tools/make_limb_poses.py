@@ -79,11 +79,16 @@ def spread(points, k):
 
 def train_run(argv, description: str, output: str, extra):
     """``(args, files, samples)`` for this tool or ``make_limb_prior.py``: ``argv`` parsed
-    (:func:`tool_arguments`) and the train clips' limb samples (:func:`train_samples`); None
-    when a train clip is missing (said on stderr)."""
+    (:func:`tool_arguments`), the train clips under ``--data`` and their limb samples
+    (:func:`samples_of`); None when a train clip is missing (the line naming them printed,
+    prefixed by the tool's name)."""
     args = tool_arguments(argv, description, output, extra)
-    found = train_samples(f"make_{Path(output).stem}", args.data, args.fps)
-    return None if found is None else (args, *found)
+    try:
+        files = present_train_clips(args.data)
+    except FileNotFoundError as exc:
+        print(f"make_{Path(output).stem}: {exc}", file=sys.stderr)
+        return None
+    return args, files, samples_of(files, BodyModel.default(), args.fps, verbose=True)
 
 
 def tool_arguments(argv, description: str, output: str, extra):
@@ -110,17 +115,6 @@ def samples_of(files, body, fps, verbose: bool = False) -> dict:
         if verbose:
             print(f"{f.name}: {len(poses)} frames at {fps:g} Hz")
     return {kind: np.concatenate(parts) for kind, parts in samples.items()}
-
-
-def train_samples(tool: str, data_dir, fps):
-    """``(files, samples)`` of the train clips under ``data_dir`` (:func:`samples_of`), or
-    None when one is missing (the line naming them printed, prefixed by ``tool``)."""
-    try:
-        files = present_train_clips(data_dir)
-    except FileNotFoundError as exc:
-        print(f"{tool}: {exc}", file=sys.stderr)
-        return None
-    return files, samples_of(files, BodyModel.default(), fps, verbose=True)
 
 
 def write_npz(path, arrays: dict, files, about: str) -> None:

@@ -40,6 +40,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ..body.skeleton import JOINT_ID
 from ..errors import InputError
 from ..motion.prior import ConstantVelocityPrior, pose_velocity
 from .energy import Energy, margin_floor, unexplained
@@ -212,8 +213,7 @@ class Tracker:
         if self.settings.energy.hidden_prior_limbs == "arms":
             limbs = {limb for limb in limbs if limb.endswith("_arm")}
         self.recorder.count("hidden_limbs", len(limbs))
-        index = {n: i for i, n in enumerate(self.body.joint_names)}
-        return sorted(index[j] for limb in limbs for j in LIMBS[limb])
+        return sorted(JOINT_ID[j] for limb in limbs for j in LIMBS[limb])
 
     @contextmanager
     def settings_overlaid(self, changes: dict):
