@@ -7,8 +7,9 @@ import pytest
 from scipy.stats import multivariate_normal
 
 from depthtrack.track.energy import pose_prior
-from depthtrack.track.limb_prior import (LimbPrior, Mixture, floored_cost, limb_prior_cost,
-                                         load_mixtures, mixture_log_density, prior_path)
+from depthtrack.track.limb_prior import (PRIOR_JOINTS, LimbPrior, Mixture, floored_cost,
+                                         limb_prior_cost, load_mixtures, mixture_log_density,
+                                         prior_path)
 from depthtrack.track.reseat import LIMB_SLOTS, MIRROR
 from tool_module import load_tool
 
@@ -154,3 +155,36 @@ def test_the_shipped_prior_is_what_the_tool_makes(tmp_path):
             np.testing.assert_allclose(made[key], shipped[key], rtol=1e-6, atol=1e-9)
         else:
             assert np.array_equal(made[key], shipped[key]), key
+
+
+def test_a_start_kept_out_of_the_learned_prior_is_the_gaussians_start(squat):
+    """With ``limb_prior_start`` False the automatic start and its front/back check score
+    with the Gaussian: the same finalists, energies and pose as a tracker without the learned
+    prior, though the learned prior scores that pose differently."""
+    from conftest import FirstFrames
+
+    from depthtrack.body import BodyModel
+    from depthtrack.track.loop import start_overlay
+    from depthtrack.track.settings import TrackerSettings
+    from depthtrack.track.tracker import Tracker
+
+    frames = FirstFrames(squat, 3)
+    depths = [frames.depth(i) for i in range(len(frames))]
+    body = BodyModel.default(height=1.75)
+    check = {"frames": 2, "min_frames": 2, "retro_frames": 0}
+    kept_out = {"energy": {"limb_prior": "learned", "limb_prior_start": False}, "heading": check}
+    starts = {}
+    for name, changes in (("gaussian", {"heading": check}), ("kept out", kept_out)):
+        with Tracker(body, frames.camera, fps=frames.fps,
+                     settings=TrackerSettings().updated(changes)) as tracker:
+            poses = dict(tracker.stream(depths))
+            starts[name] = (tracker.state.init_info, poses[0])
+    assert starts["kept out"][0]["finalists"] == starts["gaussian"][0]["finalists"]
+    np.testing.assert_array_equal(starts["kept out"][1], starts["gaussian"][1])
+    # the learned prior would have scored the start's pose otherwise
+    pose = starts["gaussian"][1][None]
+    gauss_on_limbs = pose_prior(pose, 1.0) - pose_prior(pose, 1.0, dropped_joints=PRIOR_JOINTS)
+    assert abs(limb_prior_cost(pose, load_mixtures(), 1.0, 0.1) - gauss_on_limbs)[0] > 0.1
+    assert start_overlay(TrackerSettings().updated(kept_out)) == {"energy": {"limb_prior": "gaussian"}}
+    assert start_overlay(TrackerSettings(energy={"limb_prior": "learned"})) == {}
+    assert start_overlay(TrackerSettings()) == {}

@@ -98,7 +98,8 @@ def stream_poses(tracker, frames, init_pose=None):
                 if s.start.complete_fraction > 0:
                     depth, fg, early = _complete_view(tracker, depth, fg, take, pending)
                     i += len(early)
-                tracker.state, frame, x = tracker.start(tracker.state, depth, foreground=fg)
+                with tracker.settings_overlaid(start_overlay(s)):
+                    tracker.state, frame, x = tracker.start(tracker.state, depth, foreground=fg)
                 start_state = tracker.state
                 recent.clear()
                 recent.append((i, depth))
@@ -110,8 +111,9 @@ def stream_poses(tracker, frames, init_pose=None):
                 ahead = take(K) if K > 0 else []
                 settled = None
                 if K > 0 and len(ahead) >= min(K, s.heading.min_frames):
-                    settled = settle_heading(tracker.state, ahead, _test_track(tracker),
-                                             tracker.turned_start(frame), s)
+                    with tracker.settings_overlaid(start_overlay(s)):
+                        settled = settle_heading(tracker.state, ahead, _test_track(tracker),
+                                                 tracker.turned_start(frame), s)
                 if settled is not None:
                     tracker.state, poses = settled
                     started = [(i + k, p) for k, p in enumerate(poses)]
@@ -137,6 +139,16 @@ def stream_poses(tracker, frames, init_pose=None):
         yield from held[:keep]
         del held[:keep]
     yield from held
+
+
+def start_overlay(settings) -> dict:
+    """The settings laid over an automatic start and its front/back check: the Gaussian limb
+    prior where the learned one is kept out of them (:attr:`EnergySettings.limb_prior_start`
+    False), else nothing."""
+    e = settings.energy
+    if e.limb_prior == "learned" and not e.limb_prior_start:
+        return {"energy": {"limb_prior": "gaussian"}}
+    return {}
 
 
 def first_complete(areas, fraction: float, cut=None) -> int:

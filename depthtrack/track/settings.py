@@ -185,6 +185,12 @@ class EnergySettings:
         ``gauss + w * (learned - gauss)`` (0 = the Gaussian, 1 = the learned; >= 0): a
         weaker pull toward the common limb poses. 0.5 on dev, not adopted: one of the
         first 8 parity tracks lost 11 points (README, "The learned limb prior, halfway").
+    limb_prior_start : bool
+        Whether the learned limb prior (``limb_prior`` "learned") also scores the automatic
+        start and its front/back check (:func:`.loop.stream_poses`); False gives them the
+        Gaussian, so which way the person faces is decided as without the learned prior
+        (with it, one dev cartwheel started back to front: README, "The learned limb
+        prior, after the start").
     twist_std : float
         Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
         (:func:`~.energy.spine_twist`; 0 = off; default 0.3, about 17 degrees, between the
@@ -203,6 +209,7 @@ class EnergySettings:
     limb_prior: str = "gaussian"
     limb_prior_floor: float = 0.1
     limb_prior_weight: float = 1.0
+    limb_prior_start: bool = True
 
     def __post_init__(self):
         _check(self.limb_prior in ("gaussian", "learned"),
