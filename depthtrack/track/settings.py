@@ -190,8 +190,8 @@ class EnergySettings:
         start and its front/back check (:func:`.loop.stream_poses`); False gives them the
         Gaussian, so which way the person faces is decided as without the learned prior
         (with it, one dev cartwheel started back to front). False on dev (2026-12-01,
-        31 of the 69 tracks): the cartwheel 20.8 -> 98.4 %, the 27 off-front parity tracks
-        +1.74 points; the wide tracks not yet run (README, "The learned limb prior,
+        35 of the 69 tracks): the cartwheel 20.8 -> 98.4 %, the 27 off-front parity tracks
+        +1.74 points; 34 wide tracks not yet run (README, "The learned limb prior,
         after the start").
     twist_std : float
         Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
