@@ -54,6 +54,7 @@ def stream_poses(tracker, frames, init_pose=None):
     lowest = dict.fromkeys(CORRECTION_ORDER, 0)
     # the frame whose pose the frames back to the last start are re-tracked from (-1: none)
     settle, settle_at = s.heading.retro_settle, -1
+    at_start = start_overlay(s)   # laid over each automatic start and its front/back check
 
     def take(n):
         out = [pending.popleft() for _ in range(min(n, len(pending)))]
@@ -98,7 +99,7 @@ def stream_poses(tracker, frames, init_pose=None):
                 if s.start.complete_fraction > 0:
                     depth, fg, early = _complete_view(tracker, depth, fg, take, pending)
                     i += len(early)
-                with tracker.settings_overlaid(start_overlay(s)):
+                with tracker.settings_overlaid(at_start):
                     tracker.state, frame, x = tracker.start(tracker.state, depth, foreground=fg)
                 start_state = tracker.state
                 recent.clear()
@@ -111,7 +112,7 @@ def stream_poses(tracker, frames, init_pose=None):
                 ahead = take(K) if K > 0 else []
                 settled = None
                 if K > 0 and len(ahead) >= min(K, s.heading.min_frames):
-                    with tracker.settings_overlaid(start_overlay(s)):
+                    with tracker.settings_overlaid(at_start):
                         settled = settle_heading(tracker.state, ahead, _test_track(tracker),
                                                  tracker.turned_start(frame), s)
                 if settled is not None:
