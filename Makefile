@@ -30,8 +30,10 @@ demo: $(STAMP)
 # -n auto: one pytest worker per core (pytest-xdist), whole files to each, so a file's
 # module fixtures are made once: the suite is mostly single-threaded tracking on llvmpipe.
 # --no-loadscope-reorder keeps tests/conftest.py's order, the slowest files first.
+# --durations=25 prints the slowest tests, so a CI log says where the time went (and
+# tests/conftest.py's SLOW_FILES can be kept up to date from it).
 test: $(STAMP)
-	$(PY) -m pytest -q -n auto --dist loadfile --no-loadscope-reorder
+	$(PY) -m pytest -q -n auto --dist loadfile --no-loadscope-reorder --durations=25
 
 bench: $(STAMP)
 	$(VENV)/bin/depthtrack bench

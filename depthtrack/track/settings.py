@@ -190,9 +190,10 @@ class EnergySettings:
         start and its front/back check (:func:`.loop.stream_poses`); False gives them the
         Gaussian, so which way the person faces is decided as without the learned prior
         (with it, one dev cartwheel started back to front). False on dev (2026-12-01,
-        35 of the 69 tracks): the cartwheel 20.8 -> 98.4 %, the 27 off-front parity tracks
-        +1.74 points; 34 wide tracks not yet run (README, "The learned limb prior,
-        after the start").
+        stopped by its rule after 49 of the 69 tracks): the cartwheel 20.8 -> 98.4 %, the
+        27 off-front parity tracks +1.74 points, but two wide tracks lost more than 10
+        (a hidden arm held tucked in, legs lost); not adopted (README, "The learned limb
+        prior, after the start").
     twist_std : float
         Standard deviation (rad) of a Gaussian on the twist of the chest against the pelvis
         (:func:`~.energy.spine_twist`; 0 = off; default 0.3, about 17 degrees, between the
