@@ -7,20 +7,22 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPO.parent / "shared" / "data"
 
-#: Seconds the slowest test files took on a 2-core CI machine (``pytest --durations=0``,
-#: summed per file; 2026-11), longest first. ``make test`` runs whole files per worker
-#: (``--dist loadfile``) in collection order (``--no-loadscope-reorder``): xdist's own
-#: order, by number of tests, left the one- and two-test tracker files, 80 s each, to the
-#: very end, one worker running them while the other idled. Longest first, the last files
-#: to start are short and both workers finish together. Files not named here run after
-#: these in their usual order; a stale figure only costs balance, never a test.
+#: Seconds the slowest test files took on a 2-core machine (``make test``'s ``--durations``,
+#: summed per file; 2026-12-01, 802 s for the suite), longest first. ``make test`` runs
+#: whole files per worker (``--dist loadfile``) in collection order
+#: (``--no-loadscope-reorder``): xdist's own order, by number of tests, left the one- and
+#: two-test tracker files, 80 s each, to the very end, one worker running them while the
+#: other idled. Longest first, the last files to start are short and both workers finish
+#: together. Files not named here run after these in their usual order; a stale figure
+#: only costs balance, never a test.
 SLOW_FILES = {
-    "test_track_recovery.py": 290, "test_track_start_waits.py": 160,
-    "test_track_shape_fit.py": 137, "test_track_tracker.py": 130, "test_track_facing.py": 119,
-    "test_track_bends.py": 109, "test_track_proposals.py": 87, "test_track_reference.py": 83,
-    "test_track_revoke.py": 82, "test_track_stream_gl.py": 74, "test_batch.py": 67,
-    "test_track_final_polish.py": 60, "test_track_retrack.py": 37, "test_kill.py": 29,
-    "test_demo.py": 23,
+    "test_track_revoke.py": 243, "test_track_recovery.py": 190,
+    "test_track_final_polish.py": 175, "test_track_tracker.py": 111, "test_track_bends.py": 107,
+    "test_track_shape_fit.py": 87, "test_track_facing.py": 85, "test_track_retrack.py": 79,
+    "test_track_reference.py": 69, "test_track_start_waits.py": 67,
+    "test_track_proposals.py": 61, "test_track_stream_gl.py": 48, "test_kill.py": 43,
+    "test_batch.py": 43, "test_track_limb_prior.py": 35, "test_track_carry_back.py": 28,
+    "test_demo.py": 19,
 }
 
 
