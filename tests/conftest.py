@@ -22,7 +22,7 @@ SLOW_FILES = {
     "test_track_reference.py": 69, "test_track_start_waits.py": 67,
     "test_track_proposals.py": 61, "test_track_stream_gl.py": 48, "test_kill.py": 43,
     "test_batch.py": 43, "test_track_limb_prior.py": 35, "test_track_carry_back.py": 28,
-    "test_demo.py": 19,
+    "test_track_start_grid.py": 21, "test_demo.py": 19,
 }
 
 

@@ -141,7 +141,8 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
                                 heading=None if doubted else facing_direction(previous),
                                 body_axis=None if doubted else long_axis(previous),
                                 legs=tracker.settings.start.legs in ("recovery", "always"),
-                                bends=tracker.settings.start.bends in ("recovery", "always"))
+                                bends=tracker.settings.start.bends in ("recovery", "always"),
+                                grid_heard=tracker.settings.start.grid_heard in ("recovery", "always"))
     except InputError:
         return False, x, cost
     y_cost = unexplained(energy, y)

@@ -233,7 +233,7 @@ def candidate_poses(points, up, centre, render_body, settings, bend=None):
 
 
 def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bool = False,
-                  bends: bool = False):
+                  bends: bool = False, grid_heard: bool = False):
     """Find the body in ``frame`` without a previous pose (module docstring).
 
     Parameters
@@ -257,6 +257,9 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         the straight search's best leaves more than :attr:`StartSettings.bend_gate` of the
         observation unexplained or the recogniser's neck, pelvis and knees make an angle
         below :attr:`StartSettings.bend_hip_angle` (``info["bend_gate"]``).
+    grid_heard : bool
+        Where every finalist is one of the recogniser's, also climb the grid's best
+        (:attr:`StartSettings.grid_heard`).
 
     Returns
     -------
@@ -324,6 +327,13 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     from_proposals = [c for c in coarse if c[1] >= n_grid]
     if from_proposals and all(c[1] < n_grid for c in chosen):
         chosen.append(from_proposals[0])     # the recogniser's best guess always gets a hearing
+    if grid_heard and all(c[1] >= n_grid for c in chosen):
+        # and the grid's best, on top of the finalists (it displaces none): the
+        # recogniser's fits (each also with every arm pose) can fill the shortlist on their
+        # energy before any climb
+        from_grid = [c for c in coarse if c[1] < n_grid]
+        chosen.append(from_grid[0] if from_grid else refine_root(
+            poses, energies, [next(i for i in order if i < n_grid)])[0])
     finalists = []
     best = None
 

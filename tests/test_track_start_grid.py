@@ -1,0 +1,55 @@
+"""The start's grid heard beside the recogniser's fits (``StartSettings.grid_heard``): on a
+frame where the recogniser's fits fill the shortlist before any climb (a side step, legs
+apart, its fits with the legs crossed), the grid's best is climbed too and wins on its score."""
+import numpy as np
+import pytest
+
+from depthtrack.body import BodyModel
+from depthtrack.errors import InputError
+from depthtrack.track import TrackerSettings
+from depthtrack.track.tracker import Tracker
+
+
+@pytest.fixture(scope="module")
+def sidestep(tmp_path_factory):
+    """A procedural side step from 3.5 s, 2 s at 25 fps, SR4000, ToF noise seed 2 (the
+    synthesizer places the camera for the whole window; only frame 0 is tracked)."""
+    from depthtrack.io import open_sequence
+    from depthtrack.synth.generate import synthesize_procedural
+
+    d = tmp_path_factory.mktemp("sidestep") / "seq"
+    synthesize_procedural("sidestep", d, start=3.5, seconds=2.0, seed=2)
+    return open_sequence(d)
+
+
+def _start(seq, grid_heard):
+    """``(joint errors (15,) m, init_info)`` of the automatic start on frame 0."""
+    body = BodyModel.default(height=1.75)
+    settings = TrackerSettings(shape={"enabled": False}).updated({"start": {"grid_heard": grid_heard}})
+    with Tracker(body, seq.camera, fps=seq.fps, settings=settings) as tracker:
+        tracker.init(seq.depth(0))
+        info = tracker.init_info
+        pose = tracker.pose
+    return np.linalg.norm(body.joint_positions(pose) - seq.joints[0], axis=-1), info
+
+
+def test_the_grid_is_heard_where_the_recognisers_fits_fill_the_finalists(sidestep):
+    err_never, never = _start(sidestep, "never")
+    err_heard, heard = _start(sidestep, "start")
+    # without it every finalist is one of the recogniser's fits, and the start is off
+    assert {f["from"] for f in never["finalists"]} == {"proposals"}
+    assert never["chosen_from"] == "proposals" and err_never.max() > 0.15
+    # with it the same finalists and the grid's best on top of them, which scores best
+    assert heard["finalists"][:-1] == never["finalists"]
+    assert heard["finalists"][-1]["from"] == "grid"
+    assert heard["chosen_from"] == "grid"
+    assert heard["finalists"][-1]["score"] == min(f["score"] for f in heard["finalists"])
+    assert err_heard.max() < 0.1
+
+
+def test_grid_heard_takes_the_searches_named_and_refuses_others():
+    assert TrackerSettings().start.grid_heard == "never"
+    for value in ("never", "start", "recovery", "always"):
+        assert TrackerSettings().updated({"start": {"grid_heard": value}}).start.grid_heard == value
+    with pytest.raises(InputError, match="grid_heard"):
+        TrackerSettings().updated({"start": {"grid_heard": "sometimes"}})
