@@ -14,10 +14,10 @@ from .setting_checks import power_of_two as _power_of_two
 
 #: Which way the person faces at the start (:attr:`StartSettings.facing`).
 FACINGS = ("auto", "camera", "away")
-#: Which global searches try raised legs (:attr:`StartSettings.legs`) or bent bodies
-#: (:attr:`StartSettings.bends`).
+#: Which global searches try raised legs (:attr:`StartSettings.legs`), bent bodies
+#: (:attr:`StartSettings.bends`) or always hear the grid (:attr:`StartSettings.grid_heard`).
 LEG_SEARCHES = ("never", "recovery", "always")
-BEND_SEARCHES = ("never", "start", "recovery", "always")
+SEARCHES = ("never", "start", "recovery", "always")
 #: The shape-fit trial's corrections that may be carried back (:attr:`ShapeSettings.carry_back`).
 CARRY_KINDS = ("heading", "legs", "arms")
 
@@ -211,8 +211,8 @@ class StartSettings:
                                                f"least 1, not {self.complete_frames}")
         _one_of(self, "facing", FACINGS)
         _one_of(self, "legs", LEG_SEARCHES)
-        _one_of(self, "bends", BEND_SEARCHES)
-        _one_of(self, "grid_heard", BEND_SEARCHES)
+        _one_of(self, "bends", SEARCHES)
+        _one_of(self, "grid_heard", SEARCHES)
         _check(0.0 <= self.bend_gate <= 1.0, f"StartSettings.bend_gate must be in [0, 1], "
                                              f"not {self.bend_gate}")
         _check(0.0 <= self.bend_hip_angle <= 180.0, f"StartSettings.bend_hip_angle must be "
