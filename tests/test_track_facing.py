@@ -152,3 +152,38 @@ def test_a_twin_the_facing_rules_out_leaves_the_start_as_it_is():
         assert check["kept"] == kept and len(poses) == 4
         assert check["turned_ruled_out"] == (kept == "initial")
         assert (check["unexplained_turned"] is None) == (kept == "initial")
+
+
+def test_other_starts_are_settled_too_and_the_lowest_kept_track_stands():
+    """``settle_heading`` with ``others`` (:attr:`StartSettings.displaced_checked`): each
+    other start is settled against its own twin, and the kept track with the lowest score
+    stands, whichever start it came from."""
+    from depthtrack.track.heading import settle_heading
+    from depthtrack.track.state import TrackingState
+
+    start = TrackingState(pose=np.zeros(48), log=({},))
+    scores = {0.0: 0.40, 1.0: 0.30, 5.0: 0.35, 6.0: 0.20}   # pose[0] -> unexplained share
+
+    def track(state, depths):
+        return state, np.full((len(depths), 48), state.pose[0]), {
+            "unexplained": scores[state.pose[0]], "energy": 1.0}
+
+    def turn(pose):
+        return pose + 1.0
+
+    alone, poses_alone = settle_heading(start, [None] * 3, track, turn, TrackerSettings())
+    assert alone.init_info["heading_check"]["kept"] == "turned" and poses_alone[0, 0] == 1.0
+    assert "others" not in alone.init_info["heading_check"]
+    # the other start's twin (6) explains the frames best: its track stands
+    state, poses = settle_heading(start, [None] * 3, track, turn, TrackerSettings(),
+                                  others=[np.full(48, 5.0)])
+    check = state.init_info["heading_check"]
+    assert check["kept_start"] == 1 and check["others"][0]["kept"] == "turned"
+    assert check["kept"] == "turned" and check["starts_by"] == "unexplained"
+    assert poses.shape == (4, 48) and np.all(poses[:, 0] == 6.0)
+    # where the other start's kept track is worse, the first start's stands as alone
+    scores[6.0] = 0.32
+    state, poses = settle_heading(start, [None] * 3, track, turn, TrackerSettings(),
+                                  others=[np.full(48, 5.0)])
+    assert state.init_info["heading_check"]["kept_start"] == 0
+    np.testing.assert_array_equal(poses, poses_alone)

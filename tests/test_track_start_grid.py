@@ -45,6 +45,12 @@ def test_the_grid_is_heard_where_the_recognisers_fits_fill_the_finalists(sideste
     assert heard["chosen_from"] == "grid"
     assert heard["finalists"][-1]["score"] == min(f["score"] for f in heard["finalists"])
     assert err_heard.max() < 0.1
+    # the recogniser's best start it displaced, for the front/back check to hear
+    # (StartSettings.displaced_checked)
+    ours = min((f for f in heard["finalists"] if f["from"] == "proposals"), key=lambda f: f["score"])
+    assert "displaced" not in never
+    assert heard["displaced"]["candidate"] == ours["candidate"] and heard["displaced"]["from"] == "proposals"
+    assert heard["displaced"]["score"] == ours["score"] and len(heard["displaced"]["pose"]) == 48
 
 
 def test_grid_heard_takes_the_searches_named_and_refuses_others():
@@ -53,3 +59,7 @@ def test_grid_heard_takes_the_searches_named_and_refuses_others():
         assert TrackerSettings().updated({"start": {"grid_heard": value}}).start.grid_heard == value
     with pytest.raises(InputError, match="grid_heard"):
         TrackerSettings().updated({"start": {"grid_heard": "sometimes"}})
+    assert TrackerSettings().start.displaced_checked is False
+    assert TrackerSettings().updated({"start": {"displaced_checked": True}}).start.displaced_checked
+    with pytest.raises(InputError, match="displaced_checked"):
+        TrackerSettings().updated({"start": {"displaced_checked": "yes"}})

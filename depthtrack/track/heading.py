@@ -183,7 +183,7 @@ def fit_joints(body, target, x0, iterations: int = 15, regularisation: float = 0
     return x
 
 
-def settle_heading(start, depths, track, turn, settings):
+def settle_heading(start, depths, track, turn, settings, others=()):
     """Decide between the start pose and its turned twin by tracking both.
 
     Parameters
@@ -202,6 +202,11 @@ def settle_heading(start, depths, track, turn, settings):
     settings : TrackerSettings
         :attr:`HeadingSettings.start_by` names the score that decides, and ``margin`` or
         ``energy_margin`` by how much (a fraction) the twin's must be lower.
+    others : sequence of (48,) float
+        Other start poses heard too (:attr:`StartSettings.displaced_checked`): each is
+        settled against its own twin the same way, and the kept track of all starts with
+        the lowest score wins (on the judge's tiles where every kept track has that score,
+        else by ``start_by``).
 
     Returns
     -------
@@ -209,14 +214,38 @@ def settle_heading(start, depths, track, turn, settings):
     ``(state, poses (K+1, 48))``: the kept track, the start frame's pose first. Its
     ``init_info["heading_check"]`` holds both scores, the choice, and ``ambiguous``: whether
     the two scores were within the margin of each other (either way round), a decision the
-    user may want to make (:attr:`StartSettings.facing`).
+    user may want to make (:attr:`StartSettings.facing`). With ``others``, ``"others"``
+    lists each one's check the same way and ``"kept_start"`` the index of the start kept
+    (0 = the initial pose, ``k`` = ``others[k - 1]``).
     """
     h = settings.heading
-    a = track(start, depths)
+    first = _settle_pair(start, start.pose, depths, track, turn, h)
+    if first is None:
+        return None
+    settled = [first]
+    for x in others:
+        other = _settle_pair(start, np.asarray(x, dtype=np.float64), depths, track, turn, h)
+        if other is not None:
+            settled.append(other)
+    key = ("judged" if all("judged" in s["kept_score"] for s in settled) else h.start_by)
+    kept = min(range(len(settled)), key=lambda k: settled[k]["kept_score"][key])
+    state, poses = settled[kept]["state"], settled[kept]["poses"]
+    info = {**state.init_info, "heading_check": settled[0]["info"]}
+    if len(settled) > 1:
+        info["heading_check"]["others"] = [s["info"] for s in settled[1:]]
+        info["heading_check"]["kept_start"] = kept
+        info["heading_check"]["starts_by"] = key
+    return state.replace(init_info=info), poses
+
+
+def _settle_pair(start, x_front, depths, track, turn, h):
+    """The front/back check of one start pose ``x_front (48,)`` from ``start``'s state
+    (:func:`settle_heading`): None when its track was dropped, else ``{"state", "poses",
+    "kept_score", "info"}``."""
+    a = track(start.replace(pose=x_front), depths)
     if a is None:
         return None
     state_a, track_a, score_a = a
-    x_front = start.pose
     x_turned = turn(x_front)
     b = None if x_turned is None else track(start.replace(pose=x_turned), depths)
     score_b = None if b is None else b[2]
@@ -237,16 +266,17 @@ def settle_heading(start, depths, track, turn, settings):
 
     def rounded(score, key):
         return None if score is None or key not in score else round(score[key], 4)
-    info = {**state.init_info, "heading_check": {
-        "frames": len(depths), "by": h.start_by,
-        "unexplained_initial": rounded(score_a, "unexplained"),
-        "unexplained_turned": rounded(score_b, "unexplained"),
-        "energy_initial": rounded(score_a, "energy"),
-        "energy_turned": rounded(score_b, "energy"), "kept": choice,
-        "ambiguous": bool(ambiguous), "turned_ruled_out": x_turned is None,
-        **({"judged_initial": rounded(score_a, "judged"), "judged_turned": rounded(score_b, "judged"),
-            "decided_by": "judge"} if judged else {})}}
-    return state.replace(init_info=info), poses
+    info = {"frames": len(depths), "by": h.start_by,
+            "unexplained_initial": rounded(score_a, "unexplained"),
+            "unexplained_turned": rounded(score_b, "unexplained"),
+            "energy_initial": rounded(score_a, "energy"),
+            "energy_turned": rounded(score_b, "energy"), "kept": choice,
+            "ambiguous": bool(ambiguous), "turned_ruled_out": x_turned is None,
+            **({"judged_initial": rounded(score_a, "judged"),
+                "judged_turned": rounded(score_b, "judged"),
+                "decided_by": "judge"} if judged else {})}
+    return {"state": state, "poses": poses, "info": info,
+            "kept_score": score_b if turned else score_a}
 
 
 def recheck_heading(state, pose, refit, swapped_twin_of, pixels: float, settings, judge=None,

@@ -112,9 +112,12 @@ def stream_poses(tracker, frames, init_pose=None):
                 ahead = take(K) if K > 0 else []
                 settled = None
                 if K > 0 and len(ahead) >= min(K, s.heading.min_frames):
+                    displaced = tracker.state.init_info.get("displaced")
+                    others = ([displaced["pose"]] if displaced and s.start.displaced_checked
+                              else [])
                     with tracker.settings_overlaid(at_start):
                         settled = settle_heading(tracker.state, ahead, _test_track(tracker),
-                                                 tracker.turned_start(frame), s)
+                                                 tracker.turned_start(frame), s, others)
                 if settled is not None:
                     tracker.state, poses = settled
                     started = [(i + k, p) for k, p in enumerate(poses)]

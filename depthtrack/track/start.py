@@ -259,7 +259,9 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         below :attr:`StartSettings.bend_hip_angle` (``info["bend_gate"]``).
     grid_heard : bool
         Where every finalist is one of the recogniser's, also climb the grid's best
-        (:attr:`StartSettings.grid_heard`).
+        (:attr:`StartSettings.grid_heard`); it changes nothing else (the bend gate judges
+        the best of the others). Where it wins, ``info["displaced"]`` holds the start the
+        search had without it: ``{"candidate", "from", "score", "pose": 48 floats}``.
 
     Returns
     -------
@@ -334,12 +336,18 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         from_grid = [c for c in coarse if c[1] < n_grid]
         chosen.append(from_grid[0] if from_grid else refine_root(
             poses, energies, [next(i for i in order if i < n_grid)])[0])
+        heard_grid = chosen[-1][1]
+    else:
+        heard_grid = None
     finalists = []
     best = None
+    # the best as it would be without the grid's heard best: what the bend gate judges,
+    # and the start that one displaces (StartSettings.displaced_checked)
+    rest = None
 
     def hear(e, x, tag, margin=0.0):
         """Climb a finalist on every joint (and associate it), score it, keep the best."""
-        nonlocal best
+        nonlocal best, rest
         x, e = climb(energy, climber, x, rec, start_energy=e, passes=g.passes)
         if tracker.method != "hc" and tracker.detector is not None:
             x, e, _ = associate_stage(tracker, energy, frame, x, e)
@@ -359,6 +367,8 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
         key = score + margin * abs(score)
         if best is None or key < best[0]:
             best = (key, tag, x, e)
+        if tag != ("grid", heard_grid) and (rest is None or key < rest[0]):
+            rest = (key, tag, x, score)
 
     for e, i, x in chosen:
         hear(e, x, ("proposals" if i >= n_grid else "grid", i))
@@ -367,7 +377,7 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     if bends:
         # the bent bodies are heard on their own, after the straight search (which they do
         # not change), and only when its best leaves much of the person unexplained
-        share = unexplained(energy, best[2])
+        share = unexplained(energy, rest[2])
         # the recogniser's opinion too: a fold it sees may be fitted by a straight body that
         # explains the silhouette well enough (train 02_05)
         hip = None if proposals is None else proposal_hip_angle(proposals)
@@ -402,6 +412,15 @@ def global_search(tracker, energy, frame, heading=None, body_axis=None, legs: bo
     if bends:
         info["chosen_bend"] = None if not in_grid else "straight" if kind == "grid" else kind
         info["bend_gate"] = gate
+    if (kind, i) == ("grid", heard_grid):
+        # the grid's heard best displaced the start the search had without it, for the
+        # front/back check to hear too (StartSettings.displaced_checked); its pose not
+        # rounded: a start moved by 1e-6 can end in another attractor (dev: 90_05 seed 1)
+        _, (rest_kind, rest_i), rest_x, rest_score = rest
+        info["displaced"] = {"candidate": int(rest_i),
+                             "from": "proposals" if rest_kind == "proposals" else "grid",
+                             "score": round(float(rest_score), 1),
+                             "pose": [float(v) for v in rest_x]}
     if told != "auto":
         # near profile the told side does not settle front and back: the check then runs
         info["facing_clear"] = clearly_facing(x, told, up, g.facing_margin)

@@ -57,6 +57,18 @@ class StartSettings:
         starts off, the grid's scoring better; after the recogniser's the front/back check
         turned the track right, after the grid's it kept it; README, "The start's grid
         heard").
+    displaced_checked : bool
+        Where the grid's best, heard by ``grid_heard``, wins a start (the first frame with a
+        person, not a recovery) over the recogniser's fits, the recogniser's best finalist
+        goes through the front/back check too: each start is tracked through
+        :attr:`HeadingSettings.frames` frames with its turned twin and settled as the check
+        settles one (:func:`~.heading.settle_heading`), and of the two kept tracks the one
+        with the lower score stands (``heading_check.others``, ``kept_start``). A better
+        scoring wrong start can be one the check cannot undo (dev, cartwheel seed 1). Off by
+        default: on dev, with ``grid_heard`` ``"start"``, its tracks lost 2.6 points on the
+        mean of the 8 changed starts, cartwheel seed 1 21.5, where the two starts' kept
+        tracks tied at 0.0904 against 0.0905 and the wrong one stood (README, "The
+        displaced start checked too").
     associate_level : int
         Rung the climb after a finalist's association starts on.
     centre_push : float
@@ -187,6 +199,7 @@ class StartSettings:
     root_passes: int = 2
     finalists: int = 3
     grid_heard: str = "never"
+    displaced_checked: bool = False
     associate_level: int = 1
     centre_push: float = 0.08
     axial_shifts: tuple = (0.0, -0.3, -0.15, 0.15, 0.3)
@@ -213,6 +226,9 @@ class StartSettings:
         _one_of(self, "legs", LEG_SEARCHES)
         _one_of(self, "bends", SEARCHES)
         _one_of(self, "grid_heard", SEARCHES)
+        _check(isinstance(self.displaced_checked, bool), f"StartSettings.displaced_checked "
+                                                         f"must be true or false, not "
+                                                         f"{self.displaced_checked!r}")
         _check(0.0 <= self.bend_gate <= 1.0, f"StartSettings.bend_gate must be in [0, 1], "
                                              f"not {self.bend_gate}")
         _check(0.0 <= self.bend_hip_angle <= 180.0, f"StartSettings.bend_hip_angle must be "
