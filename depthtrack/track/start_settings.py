@@ -56,11 +56,12 @@ class StartSettings:
         tracks lost 4.2 points on average (cartwheel seed 1 from 96.9 to 61.2 %: both
         starts off, the grid's scoring better; after the recogniser's the front/back check
         turned the track right, after the grid's it kept it; README, "The start's grid
-        heard").
+        heard"). Since 2026-12-02 the bend gate judges the best of the other finalists, so
+        the grid's best heard changes nothing but the finalist it adds.
     displaced_checked : bool
         Where the grid's best, heard by ``grid_heard``, wins a start (the first frame with a
-        person, not a recovery) over the recogniser's fits, the recogniser's best finalist
-        goes through the front/back check too: each start is tracked through
+        person, not a recovery), the start the search had without it (``init_info.
+        displaced``) goes through the front/back check too: each start is tracked through
         :attr:`HeadingSettings.frames` frames with its turned twin and settled as the check
         settles one (:func:`~.heading.settle_heading`), and of the two kept tracks the one
         with the lower score stands (``heading_check.others``, ``kept_start``). A better
