@@ -63,3 +63,21 @@ def test_grid_heard_takes_the_searches_named_and_refuses_others():
     assert TrackerSettings().updated({"start": {"displaced_checked": True}}).start.displaced_checked
     with pytest.raises(InputError, match="displaced_checked"):
         TrackerSettings().updated({"start": {"displaced_checked": "yes"}})
+
+
+def test_start_gate_says_which_start_the_grid_displaced(sidestep, capsys):
+    """``tools/start_gate.py`` with ``grid_heard`` "start" is the start screen: its line says
+    the grid won and how right the start it displaced was (the recogniser's, legs crossed)."""
+    import json
+
+    from tool_module import load_tool
+
+    tool = load_tool("start_gate")
+    assert tool.main([str(sidestep.path), "--settings", '{"start": {"grid_heard": "start"}}']) == 0
+    line = json.loads(capsys.readouterr().out)
+    assert line["chosen_from"] == "grid" and line["within_10cm"] == 1.0
+    assert line["displaced"]["from"] == "proposals" and line["displaced"]["within_10cm"] < 0.9
+    assert line["displaced"]["score"] > min(line["straight"])
+    assert tool.main([str(sidestep.path)]) == 0            # "never": nothing displaced
+    line = json.loads(capsys.readouterr().out)
+    assert line["chosen_from"] == "proposals" and "displaced" not in line

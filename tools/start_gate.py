@@ -8,8 +8,11 @@ frame (``frame``), how much of the observation the best straight finalist leaves
 unexplained, the angle neck - pelvis - knees' midpoint (degrees) of the recogniser's most
 confident proposals on that frame (``hip_angle``; the knees' midpoint is side-free), whether
 the bent bodies were searched (``StartSettings.bend_gate``, ``bend_hip_angle``), which body
-won, the finalists' scores and, where the sequence has ground truth, the start's mean joint
-error (cm) and share of joints within 10 cm. ``--cue`` adds the same angle of the true
+won (``chosen_from``: the grid or the recogniser's proposals), the finalists' scores and,
+where the sequence has ground truth, the start's mean joint error (cm) and share of joints
+within 10 cm. Where the grid's best, heard by ``StartSettings.grid_heard``, won, ``displaced``
+says the same of the start it displaced (where it came from, its score; the start differs
+from ``grid_heard`` "never"'s exactly on those lines). ``--cue`` adds the same angle of the true
 joints (``hip_angle_true``) and repeats the proposals' as ``hip_angle_proposals`` (its name
 before the tracker used it). A sequence with nobody on any frame is not replayed: its line
 says ``"failed"``.
@@ -17,6 +20,8 @@ says ``"failed"``.
     .venv/bin/python tools/start_gate.py SEQ [SEQ ...] [--settings JSON] [--cue]
 
 Example (README, "Bent bodies"): the train down dog opens the gate, an upright start does not.
+With ``--settings '{"start": {"grid_heard": "start"}}'`` it is the screen of README, "The
+displaced start checked too".
 """
 from __future__ import annotations
 
@@ -74,16 +79,22 @@ def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False)
             return {"seq": path.name, "failed": str(exc)}
         info = tracker.describe()["initialisation"]
         joints = np.asarray(tracker.body.joint_positions(tracker.pose))
+        displaced = info.get("displaced")
+        if displaced is not None:
+            displaced_joints = np.asarray(tracker.body.joint_positions(np.array(displaced["pose"])))
     gate = info.get("bend_gate") or {}
     line = {"seq": path.name, "frame": k, "unexplained": gate.get("unexplained"),
             "hip_angle": gate.get("hip_angle"),
             "searched": gate.get("searched"), "chosen_bend": info.get("chosen_bend"),
+            "chosen_from": info.get("chosen_from"),
             "straight": [f["score"] for f in info["finalists"] if "bend" not in f],
             "bent": [[f["bend"], f["score"]] for f in info["finalists"] if "bend" in f]}
+    if displaced is not None:
+        line["displaced"] = {"from": displaced["from"], "score": displaced["score"]}
     if seq.joints is not None:
-        err = np.linalg.norm(joints - seq.joints[k], axis=1)
-        line.update(error_cm=round(100 * float(err.mean()), 1),
-                    within_10cm=round(float((err < 0.1).mean()), 3))
+        line.update(_accuracy(joints, seq.joints[k]))
+        if displaced is not None:
+            line["displaced"].update(_accuracy(displaced_joints, seq.joints[k]))
     if cue:
         line["hip_angle_proposals"] = gate.get("hip_angle")
     if cue and seq.joints is not None:
@@ -91,6 +102,13 @@ def start_line(path: pathlib.Path, settings: TrackerSettings, cue: bool = False)
         line["hip_angle_true"] = round(float(hip_angle(*(t[JOINT_INDEX[n]] for n in
                                                          ("neck", "pelvis", "l_knee", "r_knee")))))
     return line
+
+
+def _accuracy(joints, truth) -> dict:
+    """``{"error_cm", "within_10cm"}`` of ``joints (15, 3)`` against ``truth (15, 3)``."""
+    err = np.linalg.norm(joints - truth, axis=1)
+    return {"error_cm": round(100 * float(err.mean()), 1),
+            "within_10cm": round(float((err < 0.1).mean()), 3)}
 
 
 def main(argv=None) -> int:
