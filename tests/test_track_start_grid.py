@@ -81,3 +81,12 @@ def test_start_gate_says_which_start_the_grid_displaced(sidestep, capsys):
     assert tool.main([str(sidestep.path)]) == 0            # "never": nothing displaced
     line = json.loads(capsys.readouterr().out)
     assert line["chosen_from"] == "proposals" and "displaced" not in line
+
+
+def test_searched_in_maps_each_setting_onto_its_searches():
+    start = TrackerSettings().updated({"start": {"legs": "recovery", "bends": "start",
+                                                 "grid_heard": "always"}}).start
+    assert start.searched_in("start") == {"legs": False, "bends": True, "grid_heard": True}
+    assert start.searched_in("recovery") == {"legs": True, "bends": False, "grid_heard": True}
+    default = TrackerSettings().start           # legs "never", bends "always"
+    assert default.searched_in("start") == {"legs": False, "bends": True, "grid_heard": False}

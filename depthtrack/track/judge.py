@@ -140,9 +140,7 @@ def recover(tracker, energy, frame, previous, x, cost, reason: str = "unexplaine
         y, _, _ = global_search(tracker, energy, frame,
                                 heading=None if doubted else facing_direction(previous),
                                 body_axis=None if doubted else long_axis(previous),
-                                legs=tracker.settings.start.legs in ("recovery", "always"),
-                                bends=tracker.settings.start.bends in ("recovery", "always"),
-                                grid_heard=tracker.settings.start.grid_heard in ("recovery", "always"))
+                                **tracker.settings.start.searched_in("recovery"))
     except InputError:
         return False, x, cost
     y_cost = unexplained(energy, y)

@@ -242,6 +242,13 @@ class StartSettings:
                                                  f"[0, 90) degrees, not {self.facing_margin}")
         object.__setattr__(self, "axial_shifts", tuple(float(s) for s in self.axial_shifts))
 
+    def searched_in(self, search: str) -> dict:
+        """The global search's extra candidates for ``search`` ("start" or "recovery"):
+        ``{"legs", "bends", "grid_heard"}`` flags, each on where its setting names that
+        search or "always" (:func:`~.start.global_search`'s keywords)."""
+        return {name: getattr(self, name) in (search, "always")
+                for name in ("legs", "bends", "grid_heard")}
+
 
 @dataclass(frozen=True)
 class HeightSettings:

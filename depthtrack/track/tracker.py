@@ -254,9 +254,7 @@ class Tracker:
             info = {"mode": "given pose"}
         else:
             x, e, info = global_search(self, energy, frame,
-                                       legs=self.settings.start.legs == "always",
-                                       bends=self.settings.start.bends in ("start", "always"),
-                                       grid_heard=self.settings.start.grid_heard in ("start", "always"))
+                                       **self.settings.start.searched_in("start"))
             if self.settings.start.reseat_rounds:
                 x, e, info["reseats"] = self._reseat_start(energy, x, e)
             info = {"mode": "automatic", **info, "energy": float(e)}
