@@ -14,6 +14,13 @@ Subpackages, one concern each: ``body`` (kinematics, skinned mesh), ``render`` (
 model), ``track`` (hill climbing, evidence propagation), ``evaluate`` (metrics, reports),
 ``filters`` (particle, Kalman, unscented), ``swim`` (the swimmer motion model).
 """
+# Before anything imports numpy: the same OpenBLAS kernels on every x86-64 machine, so that a
+# track is the same number everywhere (depthtrack.environment, README "The same figures on
+# another machine").
+from .environment import pin_blas_kernels
+
+pin_blas_kernels()
+
 from .contract import JOINT_INDEX, JOINT_NAMES
 from .errors import InputError
 from .camera import Camera

@@ -2,6 +2,10 @@
 sequence the tracker's recovery, re-track and proposal tests share."""
 from pathlib import Path
 
+# first, before numpy: OpenBLAS's kernels pinned as for the command line, so that the tests'
+# tracks are the same numbers on every x86-64 machine (depthtrack.environment)
+import depthtrack  # noqa: F401
+
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]

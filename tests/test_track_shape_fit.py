@@ -90,6 +90,11 @@ def test_tracker_fits_the_shape_writes_body_json_and_frees_gl(shaped_sequence, t
     # and the numeric libraries it was computed with
     assert summary["software"]["numpy"] == np.__version__
     assert summary["software"]["python"].count(".") == 2 and summary["software"]["scipy"]
+    # and the matrix kernels (the same as this process's: the field says what was loaded)
+    from threadpoolctl import threadpool_info
+    assert {lib["architecture"] for lib in summary["blas"]["libraries"]} <= {
+        lib["architecture"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+    assert summary["blas"]["libraries"] and summary["blas"]["pin"]
     assert summary["settings"]["shape"]["frames"] == 5
     assert summary["body_height_m"] == pytest.approx(1.75)      # given: not rescaled
     assert summary["body"]["shape"] == body.shape.to_dict() and not body.shape.is_average

@@ -20,6 +20,7 @@ import resource
 import sys
 import time
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 

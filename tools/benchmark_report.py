@@ -8,6 +8,7 @@ over the condition's motions; the report as Markdown.
 """
 from __future__ import annotations
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 #: The metrics aggregated over seeds (``depthtrack eval --json``'s names).

@@ -31,6 +31,7 @@ import argparse
 import sys
 from pathlib import Path
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent

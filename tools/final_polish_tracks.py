@@ -20,6 +20,7 @@ import pathlib
 import sys
 import time
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parent.parent

@@ -18,6 +18,7 @@ import argparse
 import pathlib
 import sys
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parent.parent

@@ -29,6 +29,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))

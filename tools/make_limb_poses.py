@@ -24,6 +24,7 @@ import io
 import sys
 from pathlib import Path
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 from scipy.cluster.vq import kmeans2
 

@@ -23,6 +23,7 @@ import json
 import sys
 from pathlib import Path
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]

@@ -16,6 +16,7 @@ from __future__ import annotations
 import pathlib
 import sys
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parent.parent

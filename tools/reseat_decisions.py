@@ -22,6 +22,7 @@ import json
 import pathlib
 import sys
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parent.parent

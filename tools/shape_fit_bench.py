@@ -32,6 +32,7 @@ import sys
 import time
 from pathlib import Path
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import numpy as np
 
 from depthtrack.body import BodyModel

@@ -15,6 +15,7 @@ import json
 import pathlib
 import sys
 
+import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
 import cv2
 import numpy as np
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..body.skeleton import TORSO_CONTRACT_JOINTS
 from ..contract import JOINT_INDEX
-from ..environment import software_versions
+from ..environment import blas_kernels, software_versions
 from ..errors import InputError
 from ..render.context import gl_info
 from .height import body_for_sequence, fit_body_shape
@@ -163,5 +163,7 @@ def run_tracking(seq, method: str = "hc+ep", likelihood: str = "smoothed",
         "renderer": gl_info(),
         # and with which numeric libraries (README, "Benchmark": a fresh install moves tracks)
         "software": software_versions(),
+        # and with which matrix kernels (README, "The same figures on another machine")
+        "blas": blas_kernels(),
     }
     return result, body, summary
