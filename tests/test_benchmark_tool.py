@@ -122,6 +122,17 @@ def test_the_report_names_the_software(report):
     assert "None" not in report.software_label({**software, "trimesh": None})
 
 
+def test_the_report_names_the_blas_kernels(report):
+    from depthtrack.environment import blas_kernels
+
+    blas = blas_kernels()
+    archs = {lib["architecture"] for lib in blas["libraries"]}
+    line = report.blas_label(blas)
+    assert line.startswith("OpenBLAS kernels: ") and all(a in line for a in archs)
+    assert f"({blas['pin']})" in line
+    assert report.blas_label({}) == "OpenBLAS kernels: none loaded (unknown)."
+
+
 def _report_of(figures):
     return {"sequences": [{"name": k, "metrics": {"hc+ep": {"within_10cm": v, "fps": 1.0,
                                                               "wall_fps": 0.5}}}

@@ -102,7 +102,7 @@ def test_shape_mismatch_is_rejected():
 def test_back_to_front_marks_a_trunk_facing_away_and_leaves_unknown_frames_out():
     from depthtrack.body import BodyModel
     from depthtrack.body.skeleton import MODEL_UP
-    from depthtrack.track.heading import SIDES_SWAPPED, turned_pose
+    from depthtrack.track.twins import SIDES_SWAPPED, turned_pose
 
     body = BodyModel.default(height=1.75)
     pose = np.zeros(body.dof)

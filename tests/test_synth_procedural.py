@@ -5,7 +5,7 @@ import pytest
 from depthtrack.body import BodyModel
 from depthtrack.contract import JOINT_INDEX as C
 from depthtrack.synth.procedural import PROCEDURAL_MOTIONS, PROCEDURAL_SPLIT, procedural_motion
-from depthtrack.track.heading import facing_direction
+from depthtrack.track.twins import facing_direction
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,7 @@ from depthtrack.body import BodyModel
 from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.track.carry_back import (carried_twins, corrections_of, exchange_order,
                                          exchanged_after)
-from depthtrack.track.heading import (ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, TWIN_ORDERS,
-                                      facing_direction)
+from depthtrack.track.twins import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, TWIN_ORDERS, facing_direction
 
 
 @pytest.fixture(scope="module")
@@ -100,7 +99,7 @@ def test_the_trials_heading_switch_turns_the_fit_frames_and_the_start_before_it(
     from depthtrack.io.sequence import open_sequence
     from depthtrack.track import ShapeSettings, TrackerSettings
     from depthtrack.track import rechecks as rechecks_module
-    from depthtrack.track.heading import swapped_twin
+    from depthtrack.track.twins import swapped_twin
     from depthtrack.track.height import fit_body_shape
 
     body = BodyModel.default(1.75)

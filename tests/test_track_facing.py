@@ -12,7 +12,7 @@ from depthtrack.body import BodyModel
 from depthtrack.io import open_sequence
 from depthtrack.synth.generate import synthesize_procedural
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import facing_direction
+from depthtrack.track.twins import facing_direction
 from depthtrack.track.start import clearly_facing, wrong_side
 from depthtrack.track.tracker import Tracker
 from tool_module import load_tool

@@ -10,7 +10,7 @@ from depthtrack.evaluate.fit import summarize_fit, track_fit
 from depthtrack.evaluate.metrics import mean_error, point_errors
 from depthtrack.track import TrackerSettings
 from depthtrack.track.final_polish import final_tile
-from depthtrack.track.heading import turned_pose
+from depthtrack.track.twins import turned_pose
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 
 pytestmark = pytest.mark.final_polish

@@ -9,7 +9,7 @@ from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.contract import JOINT_INDEX
 from depthtrack.detect.recognizer import JointProposals
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED
+from depthtrack.track.twins import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED
 from depthtrack.track.proposals import (TRUNK, disagreement, hip_angle, proposal_candidates,
                                         proposal_hip_angle)
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints

@@ -8,11 +8,10 @@ from depthtrack.body import BodyModel
 from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.contract import JOINT_NAMES
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import (LEGS_SWAPPED, SIDES_SWAPPED, facing_direction, fit_joints,
-                                      flip_search, limb_swapped_twins, recheck_heading,
-                                      recheck_limb_sides,
-                                      search_switch, settle_heading, sort_by_heading, swapped_twin,
-                                      swapped_twins, turned_pose)
+from depthtrack.track.heading import (flip_search, recheck_heading, recheck_limb_sides,
+                                      search_switch, settle_heading, sort_by_heading)
+from depthtrack.track.twins import (LEGS_SWAPPED, SIDES_SWAPPED, facing_direction, fit_joints,
+                                    limb_swapped_twins, swapped_twin, swapped_twins, turned_pose)
 from depthtrack.track.judge import judge_frame
 from depthtrack.track.retrack import revoke_rule
 from depthtrack.track.state import TrackingState

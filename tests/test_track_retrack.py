@@ -9,7 +9,7 @@ from depthtrack.body import BodyModel
 from depthtrack.body.skeleton import POSE_INDEX
 from depthtrack.evaluate.metrics import point_errors
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import LEGS_SWAPPED, SIDES_SWAPPED, turned_pose
+from depthtrack.track.twins import LEGS_SWAPPED, SIDES_SWAPPED, turned_pose
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints
 

@@ -102,7 +102,7 @@ def _a_start_a_quarter_turn_off(squat):
     body's long axis, and settings that look every other frame with the loss judge, the
     proposals' loss and the front/back and limb rechecks off."""
     from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
-    from depthtrack.track.heading import MODEL_UP
+    from depthtrack.body.skeleton import MODEL_UP
 
     body = BodyModel.default(height=1.75)
     x0 = fit_pose_to_joints(body, squat.joints[0])
@@ -124,7 +124,7 @@ def test_a_fresh_look_replaces_a_track_a_quarter_turn_off(squat):
     on the same frames and is never taken, and frame 0 stays a quarter turn off; so with
     look_turn 30 degrees (the search's pose faces about 90 degrees from the track's): every
     look refused and counted in looks_turned_away."""
-    from depthtrack.track.heading import SIDES_SWAPPED
+    from depthtrack.track.twins import SIDES_SWAPPED
 
     body, x0, base = _a_start_a_quarter_turn_off(squat)
     frames = 5
@@ -158,7 +158,7 @@ def test_look_turn_is_how_far_the_root_is_turned_front_for_back_or_head_for_feet
     axis (front for back) or about its forward direction (head for feet, in the image plane
     of a body facing the camera), 90 and 180 degrees, whatever the pose's own orientation."""
     from depthtrack.rotations import matrix_to_rotvec, rotation_about, rotvec_to_matrix
-    from depthtrack.track.heading import MODEL_FORWARD, MODEL_UP
+    from depthtrack.body.skeleton import MODEL_FORWARD, MODEL_UP
     from depthtrack.track.judge import look_turn_deg
 
     rng = np.random.default_rng(3)

@@ -7,7 +7,7 @@ from conftest import FirstFrames
 
 from depthtrack.body import BodyModel
 from depthtrack.track import TrackerSettings
-from depthtrack.track.heading import SIDES_SWAPPED
+from depthtrack.track.twins import SIDES_SWAPPED
 from depthtrack.track.rechecks import heading_twins, recheck_twins
 from depthtrack.track.state import TrackingState
 from depthtrack.track.tracker import Tracker, fit_pose_to_joints

@@ -50,7 +50,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from depthtrack.environment import software_versions  # noqa: E402
+from depthtrack.environment import blas_kernels, software_versions  # noqa: E402
 from depthtrack.io.atomic import write_text_atomic  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -387,6 +387,8 @@ def main(argv=None) -> int:
         "command": command, "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "machine": f"{os.cpu_count()} CPUs", "renderer": machine_renderer(),
         "software": software_versions(),
+        # the parent's kernels; each track's summary.json has its own (the same when pinned)
+        "blas": blas_kernels(),
         "commit": commit, "seconds": seconds, "fps": FPS,
         "seeds": seeds, "methods": methods, "wall_s": time.perf_counter() - t0, "jobs": args.jobs,
         "facing_from_truth": bool(args.facing_from_truth),

@@ -150,6 +150,13 @@ def software_label(software: dict) -> str:
     return "Software: " + ", ".join(f"{k} {v}" for k, v in software.items() if v) + "."
 
 
+def blas_label(blas: dict) -> str:
+    """The OpenBLAS kernels a report's tracks were computed with, one line (they follow the
+    CPU unless pinned: README, "The same figures on another machine")."""
+    kernels = sorted({lib["architecture"] for lib in blas.get("libraries", []) if lib.get("architecture")})
+    return f"OpenBLAS kernels: {', '.join(kernels) or 'none loaded'} ({blas.get('pin', 'unknown')})."
+
+
 def markdown(report: dict) -> str:
     methods = report["methods"]
     out = [f"# Held-out benchmark: {report['split']} split ({report['preset']} preset)", "",
@@ -158,6 +165,7 @@ def markdown(report: dict) -> str:
            f"{report['seconds']:g} s clips at {report['fps']:g} fps, ToF noise, seeds {report['seeds']}; "
            f"{report['wall_s']:.0f} s wall.", "",
            *([software_label(report["software"]), ""] if report.get("software") else []),
+           *([blas_label(report["blas"]), ""] if report.get("blas") else []),
            "Motions: " + ", ".join(f"`{m['name']}` ({m['kind']}, start {m['start_s']:g} s)"
                                    for m in report["motions"]), "",
            *(["**ABLATION: the tracker was told which way each person faces at the start "

@@ -29,7 +29,7 @@ sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
-from depthtrack.track.heading import facing_direction, fit_joints, limb_swapped_twins  # noqa: E402
+from depthtrack.track.twins import facing_direction, fit_joints, limb_swapped_twins  # noqa: E402
 from depthtrack.track.rechecks import heading_twins  # noqa: E402
 from depthtrack.track.energy import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     parser.add_argument("frames", help="comma-separated frames (>= 1)")
     parser.add_argument("--limbs", action="store_true",
                         help="the twins with the legs' or the arms' sides exchanged "
-                             "(heading.limb_swapped_twins, the limbs' recheck) instead of the "
+                             "(twins.limb_swapped_twins, the limbs' recheck) instead of the "
                              "front/back twin")
     args = parser.parse_args(argv)
     try:

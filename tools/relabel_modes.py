@@ -36,7 +36,7 @@ from depthtrack.body.facing import facing_error_deg  # noqa: E402
 from depthtrack.contract import JOINT_NAMES  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
-from depthtrack.track.heading import ARMS_SWAPPED, LEGS_SWAPPED, TWIN_ORDERS  # noqa: E402
+from depthtrack.track.twins import ARMS_SWAPPED, LEGS_SWAPPED, TWIN_ORDERS  # noqa: E402
 
 #: Relabelling name -> contract joint order (index j of the relabelled joints holds the
 #: tracked joint that would be j's under that mistake).

@@ -30,7 +30,7 @@ sys.path.insert(0, str(REPO / "tools"))
 
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
-from depthtrack.track.heading import facing_direction, fit_joints, long_axis  # noqa: E402
+from depthtrack.track.twins import facing_direction, fit_joints, long_axis  # noqa: E402
 from depthtrack.track.energy import unexplained  # noqa: E402
 from depthtrack.track.search import climb  # noqa: E402
 from depthtrack.track.start import global_search  # noqa: E402

@@ -29,7 +29,7 @@ from depthtrack.body.facing import facing_error_deg, sides_exchanged  # noqa: E4
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.io import open_sequence  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402
-from depthtrack.track.heading import LIMB_SWAPS  # noqa: E402
+from depthtrack.track.twins import LIMB_SWAPS  # noqa: E402
 from depthtrack.track.height import body_for_sequence, trial_settings  # noqa: E402
 from depthtrack.track.tracker import Tracker  # noqa: E402
 

@@ -13,8 +13,8 @@ to 21); 13 final tracks turned again by themselves, one (02_03 from 120 degrees,
 seed 4) stayed back to front for the whole clip (README, "The tracker").
 
 Both corrections exchange sides: the twin puts each joint where the other side's was
-(:data:`.heading.SIDES_SWAPPED`, :data:`.heading.LEGS_SWAPPED`,
-:data:`.heading.ARMS_SWAPPED`). The exchanges are involutions over disjoint pairs of
+(:data:`.twins.SIDES_SWAPPED`, :data:`.twins.LEGS_SWAPPED`,
+:data:`.twins.ARMS_SWAPPED`). The exchanges are involutions over disjoint pairs of
 joints, so they commute: a frame before corrections carries the exchange of every kind
 corrected an odd number of times after it (:func:`exchanged_after`), fitted to its joints
 as the recheck fits its twins (:func:`carried_twins`) and climbed on its own frame
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .heading import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints, twins_to
+from .twins import ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, fit_joints, twins_to
 from .search import lowest_climb
 
 #: The joint exchange of each kind of correction (contract joint order).
@@ -65,8 +65,8 @@ def exchange_order(kinds) -> list:
 def carried_twins(body, pose, kinds, starts) -> np.ndarray:
     """``(K, 48)``: ``pose (48,)`` with the sides of ``kinds`` exchanged, its joints where the
     pose's are. With ``"heading"`` the body faces the other way, fitted from each of
-    ``starts`` (:func:`.heading.twins_to`); limbs alone are fitted from the pose itself
-    (as :func:`.heading.limb_swapped_twins`)."""
+    ``starts`` (:func:`.twins.twins_to`); limbs alone are fitted from the pose itself
+    (as :func:`.twins.limb_swapped_twins`)."""
     pose = np.asarray(pose, dtype=np.float64)
     target = np.asarray(body.joint_positions(pose))[exchange_order(kinds)]
     if "heading" in kinds:

@@ -14,10 +14,10 @@ from .setting_checks import power_of_two as _power_of_two
 #: (limbs turned with it), or its swapped twin (the joints kept, the sides exchanged, as the
 #: recheck while tracking uses).
 START_TWINS = ("turned", "swapped", "search")
-#: How the swapped twins may be fitted (:func:`.heading.swapped_twins`; ``twin_starts``).
+#: How the swapped twins may be fitted (:func:`.twins.swapped_twins`; ``twin_starts``).
 TWIN_STARTS = ("turned", "rest")
 #: Which sides the swapped twins exchange (:attr:`HeadingSettings.twin_swaps`,
-#: :data:`.heading.TWIN_ORDERS`).
+#: :data:`.twins.TWIN_ORDERS`).
 TWIN_SWAPS = ("all", "all_but_legs")
 #: The corrections whose earlier frames :attr:`HeadingSettings.retro_after` may re-track.
 RETRO_KINDS = ("heading", "limbs", "recovery")
@@ -94,14 +94,14 @@ class HeadingSettings:
     (:func:`.heading.recheck_limb_sides`: a track with its legs crossed).
 
     ``twin_starts``: where the swapped twin's fit starts (:data:`TWIN_STARTS`, one or both;
-    :func:`.heading.swapped_twins`); every twin is climbed and the lowest energy competes,
+    :func:`.twins.swapped_twins`); every twin is climbed and the lowest energy competes,
     in the recheck and in the start check. Both by default: a twin fitted from the turned
     pose inherits its contortions; from the rest pose it does not (dev 05_20, Kinect v2 from
     120 degrees, seed 2: 20 % -> 88 % of joints within 10 cm, the start check now keeping
     the twin; 105_05 seed 3 62 -> 72 %; five other dev sequences unchanged).
 
     ``twin_swaps``: which sides the twins exchange (:data:`TWIN_SWAPS`, one or more; each
-    fitted from every ``twin_starts``, :data:`.heading.TWIN_ORDERS`): ``"all"``, the body
+    fitted from every ``twin_starts``, :data:`.twins.TWIN_ORDERS`): ``"all"``, the body
     facing the other way with every limb where the image put it; ``"all_but_legs"``, facing
     the other way with the knees and ankles kept on their sides (no arms' counterpart: an
     elbow kept on its side while the shoulders exchange theirs is out of reach). A track can

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import InputError
 from .energy import unexplained
-from .heading import facing_direction, long_axis
+from .twins import facing_direction, long_axis
 from .proposals import disagreement, frame_proposals
 from .start import global_search
 
@@ -97,7 +97,7 @@ def judge_frame(state, cost: float, reason, settings, found=None):
 def look_turn_deg(a, b) -> float:
     """Degrees (0 to 180) poses ``a`` and ``b`` (48,) are turned from each other: the larger
     of the angles between their root forward directions and between their long axes
-    (:func:`.heading.facing_direction`, :func:`.heading.long_axis`). About 180 for a pose
+    (:func:`.twins.facing_direction`, :func:`.twins.long_axis`). About 180 for a pose
     and its turned twin (front and back swapped) and for the pose upside down in the image
     plane (a cartwheel's star read head for feet: the forward direction kept)."""
     def angle(u, v):

@@ -23,8 +23,8 @@ import numpy as np
 
 from ..contract import JOINT_INDEX, JOINT_NAMES
 from ..detect.parts import Detection
-from .heading import (ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, TRUNK_ROOT_JOINTS, fit_joints,
-                      root_from_joints)
+from .twins import (ARMS_SWAPPED, LEGS_SWAPPED, SIDES_SWAPPED, TRUNK_ROOT_JOINTS, fit_joints,
+                    root_from_joints)
 
 #: Joints the judge checks: the recogniser finds them reliably, side-free.
 TRUNK = ("head", "neck", "pelvis", "l_shoulder", "r_shoulder")
@@ -129,7 +129,7 @@ def disagreement(joints, proposals, min_confidence: float, distance: float,
 def pose_from_joints(body, target, weights):
     """A pose ``(48,)`` whose joints match ``target (15, 3)`` where ``weights (15,) > 0``:
     the root by Kabsch on the trunk joints, then Levenberg-Marquardt on every joint
-    (:func:`~.heading.fit_joints`). None with fewer than three trunk joints known."""
+    (:func:`~.twins.fit_joints`). None with fewer than three trunk joints known."""
     w = np.asarray(weights, dtype=np.float64)
     root = ROOT_JOINTS[w[ROOT_JOINTS] > 0]
     if len(root) < 3:

@@ -29,7 +29,8 @@ import numpy as np
 
 from ..contract import JOINT_INDEX
 from .energy import relative_lead
-from .heading import due, fit_joints
+from .heading import due
+from .twins import fit_joints
 from .proposals import JOINT_CLASSES, confident
 
 #: Each limb: (root, middle, end) joints.
@@ -81,7 +82,7 @@ def reach_candidates(body, pose, proposals, min_confidence: float, near: float =
     poses : (K, 48) float
         For each limb and each end-joint proposal within its reach (root joint to proposal
         at most the limb's length plus :data:`REACH_SLACK`) and farther than ``near`` from
-        both ends of the limb's class: the pose fitted (:func:`~.heading.fit_joints`, from
+        both ends of the limb's class: the pose fitted (:func:`~.twins.fit_joints`, from
         ``pose``) with every other joint kept and the end at the proposal, the middle joint
         free, and once more with the middle joint at each of its class's proposals that fits
         between.

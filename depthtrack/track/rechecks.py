@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from .energy import margin_floor
-from .heading import (due, flip_search, limb_swapped_twins, recheck_by_search, recheck_heading,
-                      recheck_limb_sides, swapped_twins, turned_pose)
+from .heading import due, flip_search, recheck_by_search, recheck_heading, recheck_limb_sides
+from .twins import limb_swapped_twins, swapped_twins, turned_pose
 from .proposals import frame_proposals
 from .reach import (blob_reach_candidates, hidden_limbs, reach_candidates, recheck_reach,
                     share_in_pixels, unexplained_blobs)

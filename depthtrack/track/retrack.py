@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..body.facing import back_to_front, sides_exchanged
-from .heading import CHANNELS_CLEARED, LIMB_SWAPS
+from .heading import CHANNELS_CLEARED
+from .twins import LIMB_SWAPS
 from .judge import NO_LOOK
 
 

@@ -33,7 +33,7 @@ def fit_pose_to_joints(body, joints, regularisation: float = 0.01):
     """
     from scipy.optimize import least_squares
 
-    from .heading import root_from_joints
+    from .twins import root_from_joints
 
     target = np.asarray(joints, dtype=np.float64)
     known = np.all(np.isfinite(target), axis=1)
