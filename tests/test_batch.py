@@ -50,6 +50,13 @@ def test_workers_match_serial_and_a_broken_sequence_is_reported(seqs, tmp_path, 
         assert sorted(p.name for p in (tracks / name / "ep").iterdir()) == [
             "body.json", "joints.csv", "poses.npz", "summary.json", "track.bvh"]
     assert not [p for p in tracks.rglob(".*")]          # no temporaries left
+    # the spawned workers computed with this process's OpenBLAS kernels (pinned alike: README,
+    # "The same figures on another machine")
+    from depthtrack.environment import blas_kernels
+    here = {lib["architecture"] for lib in blas_kernels()["libraries"]}
+    for name in ("wave", "squat"):
+        blas = json.loads((tracks / name / "ep" / "summary.json").read_text())["blas"]
+        assert blas["libraries"] and {lib["architecture"] for lib in blas["libraries"]} <= here
 
 
 def test_dask_local_cluster_matches_serial(seqs):
