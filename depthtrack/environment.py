@@ -31,8 +31,8 @@ BLAS_CORE = "Haswell"
 
 #: Why the kernels are or are not :data:`BLAS_CORE`'s, set by :func:`pin_blas_kernels`:
 #: "pinned", "OPENBLAS_CORETYPE set" (the user's choice stands), "DEPTHTRACK_BLAS=native"
-#: (the user's opt-out), "numpy imported first" (too late: OpenBLAS has chosen), or
-#: "no AVX2 and FMA" (another CPU: OpenBLAS chooses).
+#: (the user's opt-out), "numpy imported first" (too late: OpenBLAS has chosen), "CPU not
+#: read" (not Linux: OpenBLAS chooses) or "no AVX2 and FMA" (another CPU: OpenBLAS chooses).
 BLAS_PIN = "not called"
 
 #: ``summary.json`` key -> the distributions that provide it, first found wins (OpenCV
@@ -86,7 +86,9 @@ def pin_blas_kernels(environ=None, modules=None, cpu_flags=None) -> str:
         reason = "DEPTHTRACK_BLAS=native"
     elif "numpy" in modules:
         reason = "numpy imported first"
-    elif not {"avx2", "fma"} <= (_cpu_flags() if cpu_flags is None else set(cpu_flags)):
+    elif (flags := _cpu_flags() if cpu_flags is None else set(cpu_flags)) is None:
+        reason = "CPU not read"
+    elif not {"avx2", "fma"} <= flags:
         reason = "no AVX2 and FMA"
     else:
         environ["OPENBLAS_CORETYPE"] = BLAS_CORE
@@ -96,9 +98,9 @@ def pin_blas_kernels(environ=None, modules=None, cpu_flags=None) -> str:
     return reason
 
 
-def _cpu_flags() -> set:
-    """The CPU's feature flags from /proc/cpuinfo; empty elsewhere than on x86-64 Linux (no
-    pin where the CPU cannot be asked without loading a library)."""
+def _cpu_flags():
+    """The CPU's feature flags from /proc/cpuinfo (a set; empty on a CPU that is not x86-64),
+    or None where they cannot be read without loading a library (not Linux): no pin there."""
     if platform.machine().lower() not in ("x86_64", "amd64"):
         return set()
     try:
@@ -108,7 +110,7 @@ def _cpu_flags() -> set:
                     return set(line.split(":", 1)[1].split())
     except OSError:
         pass
-    return set()
+    return None
 
 
 def blas_kernels() -> dict:

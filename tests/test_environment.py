@@ -7,7 +7,7 @@ import pytest
 
 from depthtrack.environment import BLAS_CORE, _cpu_flags, pin_blas_kernels
 
-AVX2 = {"avx2", "fma"} <= _cpu_flags()
+AVX2 = {"avx2", "fma"} <= (_cpu_flags() or set())
 
 
 @pytest.mark.parametrize("environ, modules, flags, reason, pinned", [
@@ -16,6 +16,7 @@ AVX2 = {"avx2", "fma"} <= _cpu_flags()
     ({"DEPTHTRACK_BLAS": "native"}, {}, {"avx2", "fma"}, "DEPTHTRACK_BLAS=native", False),
     ({}, {"numpy": object()}, {"avx2", "fma"}, "numpy imported first", False),
     ({}, {}, {"sse2", "avx"}, "no AVX2 and FMA", False),
+    ({}, {}, set(), "no AVX2 and FMA", False),           # not x86-64 (an ARM CPU)
 ])
 def test_pin_only_where_it_can_take_and_nobody_chose(environ, modules, flags, reason, pinned):
     env = dict(environ)
@@ -58,7 +59,7 @@ def test_import_depthtrack_first_pins_numpys_openblas_and_summary_names_it():
     assert pinned["product"] == told["product"]
     # on a CPU with AVX-512 OpenBLAS's own choice sums otherwise (3.5 % of these entries
     # differ in the last bits there), which is what the pin is for
-    if "avx512f" in _cpu_flags():
+    if "avx512f" in (_cpu_flags() or set()):
         assert _probe(DEPTHTRACK_BLAS="native")["product"] != pinned["product"]
     # numpy first: too late, and said so
     late = _probe(first="import numpy")
@@ -71,3 +72,10 @@ def test_the_suite_runs_pinned_like_the_command_line():
     command line's do (unless the person running them chose otherwise)."""
     from depthtrack import environment
     assert environment.BLAS_PIN in ("pinned", "OPENBLAS_CORETYPE set", "DEPTHTRACK_BLAS=native")
+
+
+def test_no_pin_where_the_cpu_cannot_be_read(monkeypatch):
+    from depthtrack import environment
+    monkeypatch.setattr(environment, "_cpu_flags", lambda: None)     # not Linux
+    env = {}
+    assert environment.pin_blas_kernels(env, {}) == "CPU not read" and not env
