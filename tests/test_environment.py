@@ -1,5 +1,6 @@
 """The same OpenBLAS kernels on every x86-64 machine (depthtrack.environment.pin_blas_kernels)."""
 import json
+import os
 import subprocess
 import sys
 
@@ -40,7 +41,7 @@ print(json.dumps({{**blas_kernels(), "product": (a @ b).tobytes().hex()}}))
 
 
 def _probe(first="", **env):
-    import os
+    """One fresh Python: its kernels (``blas_kernels``) and a matrix product's bits."""
     clean = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_CORETYPE", "DEPTHTRACK_BLAS")}
     out = subprocess.run([sys.executable, "-c", PROBE.format(first=first)], capture_output=True,
                          text=True, env={**clean, **env}, check=True).stdout
@@ -48,7 +49,7 @@ def _probe(first="", **env):
 
 
 @pytest.mark.skipif(not AVX2, reason="pins only on x86-64 with AVX2 and FMA")
-def test_import_depthtrack_first_pins_numpys_openblas_and_summary_names_it():
+def test_import_depthtrack_first_pins_every_openblas_and_says_so():
     pinned = _probe()
     assert pinned["pin"] == "pinned" and pinned["coretype"] == BLAS_CORE
     archs = {lib["architecture"] for lib in pinned["libraries"]}
