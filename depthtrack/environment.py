@@ -115,7 +115,7 @@ def _cpu_flags():
 
 def blas_kernels() -> dict:
     """``{"pin": BLAS_PIN, "coretype": ..., "libraries": [{"library", "version",
-    "architecture", "threads"}, ...]}``: the OpenBLAS libraries loaded in this process (numpy's,
+    "architecture", "threads"}, ...]}``: the BLAS libraries loaded in this process (numpy's OpenBLAS,
     and scipy's once scipy.linalg is loaded) and the kernels each chose."""
     from threadpoolctl import threadpool_info
     libraries = [{"library": os.path.basename(lib.get("filepath", "")),

@@ -44,11 +44,10 @@ import sys
 import time
 from pathlib import Path
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import numpy as np
-
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import numpy as np  # noqa: E402
 
 from depthtrack.environment import blas_kernels, software_versions  # noqa: E402
 from depthtrack.io.atomic import write_text_atomic  # noqa: E402

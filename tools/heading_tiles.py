@@ -20,12 +20,11 @@ from __future__ import annotations
 import pathlib
 import sys
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import numpy as np
-
 REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tools"))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import numpy as np  # noqa: E402
 
 from depthtrack.errors import InputError  # noqa: E402
 from depthtrack.track import TrackerSettings  # noqa: E402

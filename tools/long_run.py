@@ -29,10 +29,9 @@ import tempfile
 import time
 from pathlib import Path
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import numpy as np  # noqa: E402
 
 
 def rss_mb() -> float:

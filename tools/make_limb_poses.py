@@ -24,13 +24,12 @@ import io
 import sys
 from pathlib import Path
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import numpy as np
-from scipy.cluster.vq import kmeans2
-
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tools"))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import numpy as np  # noqa: E402
+from scipy.cluster.vq import kmeans2  # noqa: E402
 
 from depthtrack.body.model import BodyModel  # noqa: E402
 from depthtrack.body.skeleton import LOWER, UPPER  # noqa: E402

@@ -23,12 +23,11 @@ import json
 import sys
 from pathlib import Path
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import numpy as np
-
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tools"))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import numpy as np  # noqa: E402
 
 from depthtrack.body.model import BodyModel  # noqa: E402
 from make_limb_poses import samples_of, train_run, write_npz  # noqa: E402

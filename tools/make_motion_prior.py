@@ -30,11 +30,10 @@ import json
 import sys
 from pathlib import Path
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import numpy as np
-
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import numpy as np  # noqa: E402
 
 from depthtrack.body.model import BodyModel  # noqa: E402
 from depthtrack.io.atomic import write_text_atomic  # noqa: E402

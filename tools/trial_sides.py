@@ -19,11 +19,10 @@ import json
 import pathlib
 import sys
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import numpy as np
-
 REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import numpy as np  # noqa: E402
 
 from depthtrack.body.facing import facing_error_deg, sides_exchanged  # noqa: E402
 from depthtrack.errors import InputError  # noqa: E402

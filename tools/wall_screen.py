@@ -15,12 +15,11 @@ import json
 import pathlib
 import sys
 
-import depthtrack  # noqa: F401  (first, before numpy: the same OpenBLAS kernels on every machine)
-import cv2
-import numpy as np
-
 REPO = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
+import depthtrack  # noqa: E402,F401  (before numpy: the same OpenBLAS kernels on every machine)
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
 
 from depthtrack.detect import segment_foreground  # noqa: E402
 from depthtrack.detect.segment import inlier_distance  # noqa: E402
