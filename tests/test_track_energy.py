@@ -1,5 +1,6 @@
 """The MAP energy's trunk-twist prior: the twist against closed forms, the term against the renderer."""
 import numpy as np
+import pytest
 
 from depthtrack.body.rotations import matrix_to_rotvec, rotation_about
 from depthtrack.track.energy import spine_twist
@@ -146,6 +147,81 @@ def test_the_far_arm_of_a_side_view_takes_the_hidden_prior():
             assert (far_leg <= hidden) == legs and (not far_leg & hidden) == (not legs)
     with Tracker(body, camera) as tracker:                           # off by default
         assert tracker._energy(_side_view_frame(tracker, side), hidden_of=side).hidden_joints == ()
+
+
+def test_far_side_limbs_follow_the_trunk_not_the_limb():
+    """:func:`far_side_limbs`: a body turned 90 degrees to the camera lists the arm and leg
+    whose shoulder and hip lie farther away, the other side when turned the other way, none
+    from the front or the back or beyond ``within_deg`` of a side view; raising the far arm
+    over the head (out of the trunk's shadow) changes nothing, since the trunk decides."""
+    from depthtrack.body.model import BodyModel
+    from depthtrack.body.skeleton import JOINT_ID
+    from depthtrack.contract import JOINT_INDEX
+    from depthtrack.track.reach import far_side_limbs
+
+    body = BodyModel.default(1.75)
+
+    def turned(ry):
+        x = np.zeros(48)
+        x[2] = 3.0
+        x[4] = ry
+        return x
+
+    for ry in (np.pi / 2, 3 * np.pi / 2):
+        joints = body.joint_positions(turned(ry))
+        far = "l" if (np.linalg.norm(joints[JOINT_INDEX["l_shoulder"]])
+                      > np.linalg.norm(joints[JOINT_INDEX["r_shoulder"]])) else "r"
+        assert far_side_limbs(joints, 45.0) == {f"{far}_arm", f"{far}_leg"}
+    assert far_side_limbs(body.joint_positions(turned(np.pi / 2)), 45.0) != far_side_limbs(
+        body.joint_positions(turned(3 * np.pi / 2)), 45.0)
+    for ry in (0.0, np.pi, np.pi / 2 - np.radians(50)):
+        assert far_side_limbs(body.joint_positions(turned(ry)), 45.0) == set()
+    assert far_side_limbs(body.joint_positions(turned(np.pi / 2 - np.radians(50))), 60.0)
+    side = turned(np.pi / 2)
+    far = next(iter(far_side_limbs(body.joint_positions(side), 45.0) - {"l_leg", "r_leg"}))[0]
+    raised = side.copy()
+    raised[3 + 3 * JOINT_ID[f"{far}_shoulder"] + 2] = 2.8 if far == "l" else -2.8   # overhead
+    assert far_side_limbs(body.joint_positions(raised), 45.0) == far_side_limbs(
+        body.joint_positions(side), 45.0)
+
+
+def test_the_side_gate_charges_the_far_arm_wherever_it_is():
+    """``hidden_prior_gate`` "side": :meth:`Tracker.hidden_joints` lists the far arm of a side
+    view from the trunk alone -- also with that arm raised in plain view, where the "shown"
+    gate does not list it -- and nothing from the front."""
+    from depthtrack.body.model import BodyModel
+    from depthtrack.body.skeleton import JOINT_ID
+    from depthtrack.camera import Camera
+    from depthtrack.errors import InputError
+    from depthtrack.track.tracker import Tracker, TrackerSettings
+
+    body = BodyModel.default(1.75)
+    camera = Camera.preset("sr4000")
+    side = np.zeros(48)
+    side[2] = 3.0
+    side[4] = np.pi / 2
+    z = body.joint_positions(side)[:, 2]
+    far = "l" if z[JOINT_ID["l_shoulder"]] > z[JOINT_ID["r_shoulder"]] else "r"
+    far_arm = {JOINT_ID[f"{far}_{j}"] for j in ("shoulder", "elbow", "wrist")}
+    raised = side.copy()
+    raised[3 + 3 * JOINT_ID[f"{far}_shoulder"] + 2] = 2.8 if far == "l" else -2.8
+    gated = TrackerSettings(energy={"hidden_prior_std": 0.5, "hidden_prior_gate": "side",
+                                    "hidden_prior_limbs": "arms"})
+    shown = TrackerSettings(energy={"hidden_prior_std": 0.5, "hidden_prior_limbs": "arms"})
+    with Tracker(body, camera, settings=gated) as tracker:
+        for pose in (side, raised):
+            assert set(tracker.hidden_joints(_side_view_frame(tracker, pose), pose)) == far_arm
+        front = side.copy()
+        front[4] = 0.0
+        assert tracker.hidden_joints(_side_view_frame(tracker, front), front) == []
+        energy = tracker._energy(_side_view_frame(tracker, side), hidden_of=side)
+        assert set(energy.hidden_joints) == far_arm and energy.hidden_prior_std == 0.5
+    with Tracker(body, camera, settings=shown) as tracker:
+        assert not far_arm & set(tracker.hidden_joints(_side_view_frame(tracker, raised), raised))
+    with pytest.raises(InputError, match="hidden_prior_gate"):
+        TrackerSettings(energy={"hidden_prior_gate": "behind"})
+    with pytest.raises(InputError, match="hidden_side_deg"):
+        TrackerSettings(energy={"hidden_side_deg": 120.0})
 
 
 def test_tracking_a_side_view_searches_the_far_arm_under_the_hidden_prior():

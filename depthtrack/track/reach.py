@@ -195,6 +195,38 @@ def hidden_limbs(labels, person, joint_names, min_pixels: int) -> set:
     return out
 
 
+def far_side_limbs(joints, within_deg: float) -> set:
+    """The limbs on the far side of a body the camera sees from the side: where the line
+    from one shoulder to the other (one hip to the other) points within ``within_deg`` of
+    the ray from the camera to its middle, the arm (leg) whose root lies farther from the
+    camera. Unlike :func:`hidden_limbs` it asks the trunk, not the limb, so a limb cannot
+    vanish into it by being tracked out of sight.
+
+    Parameters
+    ----------
+    joints : (15, 3) float
+        Joint positions in camera coordinates (the camera at the origin),
+        :data:`depthtrack.contract.JOINT_NAMES` order.
+    within_deg : float
+        How far from a pure side view (degrees) the trunk may face.
+
+    Returns
+    -------
+    set of str
+        :data:`LIMBS` keys.
+    """
+    x = np.asarray(joints, dtype=np.float64)
+    least = np.cos(np.radians(within_deg))
+    out = set()
+    for root, kind in (("shoulder", "arm"), ("hip", "leg")):
+        left, right = x[JOINT_INDEX[f"l_{root}"]], x[JOINT_INDEX[f"r_{root}"]]
+        line, ray = left - right, 0.5 * (left + right)
+        norms = np.linalg.norm(line) * np.linalg.norm(ray)
+        if norms > 0 and abs(float(line @ ray)) / norms >= least:
+            out.add(f"l_{kind}" if np.linalg.norm(left) > np.linalg.norm(right) else f"r_{kind}")
+    return out
+
+
 def blob_reach_candidates(body, pose, blobs, near: float = 0.1, limbs_free=None):
     """Poses with one limb re-fitted to reach into an unexplained blob.
 

@@ -168,6 +168,18 @@ class EnergySettings:
         Which hidden limbs take ``hidden_prior_std``: every limb, or the arms only (a far
         leg hidden behind the near one still walks: a prior toward the standing pose bends
         it wrong).
+    hidden_prior_gate : {"shown", "side"}
+        How a frame's hidden limbs are found. ``"shown"``: those the predicted pose's render
+        shows hidden (above). ``"side"``: those on the far side of the predicted pose's trunk
+        where the camera sees it from the side, within ``hidden_side_deg`` of a pure side
+        view (:func:`.reach.far_side_limbs`; the arm whose shoulder, the leg whose hip, lies
+        farther from the camera): the trunk's orientation, which the image settles, decides,
+        not the limb's own place, so a limb held out of sight by the prior does not keep the
+        prior on (the trap of ``"shown"``).
+    hidden_side_deg : float
+        With ``hidden_prior_gate`` ``"side"``: how far (degrees, 0 to 90) the line between
+        the shoulders (hips) may point from the camera's ray and the trunk still count as
+        seen from the side.
     limb_prior : {"gaussian", "learned"}
         How the pose prior scores each limb's root and middle joint (shoulder and elbow,
         hip and knee): the Gaussian of ``pose_prior_std``, or the learned mixture of the
@@ -209,6 +221,8 @@ class EnergySettings:
     twist_std: float = 0.3
     hidden_prior_std: float = 0.0
     hidden_prior_limbs: str = "all"
+    hidden_prior_gate: str = "shown"
+    hidden_side_deg: float = 45.0
     limb_prior: str = "gaussian"
     limb_prior_floor: float = 0.1
     limb_prior_weight: float = 1.0
@@ -224,6 +238,10 @@ class EnergySettings:
                "limb_prior 'learned' needs pose_prior_std above 0 (its floor's std)")
         _check(self.hidden_prior_limbs in ("all", "arms"),
                f"hidden_prior_limbs must be 'all' or 'arms', not {self.hidden_prior_limbs!r}")
+        _check(self.hidden_prior_gate in ("shown", "side"),
+               f"hidden_prior_gate must be 'shown' or 'side', not {self.hidden_prior_gate!r}")
+        _check(0.0 <= self.hidden_side_deg <= 90.0,
+               f"hidden_side_deg must be within 0 to 90, not {self.hidden_side_deg!r}")
         _positive(self, "damping", "likelihood_weight", "pose_prior_std", "twist_std",
                   "prior_huber", "hidden_prior_std", allow_zero=True)
 

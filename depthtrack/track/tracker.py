@@ -50,7 +50,7 @@ from .judge import judge_frame, loss_reason, proposal_check, recover
 from .observe import as_depth, observe, person_present
 from .propagate import associate_stage, evidence_parts
 from .limb_prior import LimbPrior, load_mixtures
-from .reach import LIMBS
+from .reach import LIMBS, far_side_limbs
 from .rechecks import recheck_stage, tracked_hidden, turned_start
 from .record import Recorder
 from .renderers import RendererSet
@@ -207,10 +207,16 @@ class Tracker:
     def hidden_joints(self, frame, pose) -> list:
         """The joints (skeleton indices) of the limbs ``pose (48,)`` shows hidden on ``frame``
         (:func:`.rechecks.tracked_hidden`: its lower segment on fewer than
-        :attr:`HeadingSettings.reseat_hidden` of the person's pixels; only the arms with
-        :attr:`EnergySettings.hidden_prior_limbs` ``"arms"``); counted in ``hidden_limbs``."""
-        limbs = tracked_hidden(self, frame, self.renderers.labels(pose))
-        if self.settings.energy.hidden_prior_limbs == "arms":
+        :attr:`HeadingSettings.reseat_hidden` of the person's pixels), or with
+        :attr:`EnergySettings.hidden_prior_gate` ``"side"`` those on the far side of a trunk
+        seen from the side (:func:`.reach.far_side_limbs`); only the arms with
+        :attr:`EnergySettings.hidden_prior_limbs` ``"arms"``; counted in ``hidden_limbs``."""
+        s = self.settings.energy
+        if s.hidden_prior_gate == "side":
+            limbs = far_side_limbs(self.body.joint_positions(pose), s.hidden_side_deg)
+        else:
+            limbs = tracked_hidden(self, frame, self.renderers.labels(pose))
+        if s.hidden_prior_limbs == "arms":
             limbs = {limb for limb in limbs if limb.endswith("_arm")}
         self.recorder.count("hidden_limbs", len(limbs))
         return sorted(JOINT_ID[j] for limb in limbs for j in LIMBS[limb])
