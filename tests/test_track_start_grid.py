@@ -47,10 +47,15 @@ def test_the_grid_is_heard_where_the_recognisers_fits_fill_the_finalists(sideste
     assert err_heard.max() < 0.1
     # the recogniser's best start it displaced, for the front/back check to hear
     # (StartSettings.displaced_checked)
-    ours = min((f for f in heard["finalists"] if f["from"] == "proposals"), key=lambda f: f["score"])
+    # (two of the recogniser's finalists can tie at the scores' 0.1 rounding: on one
+    # machine 961 and 970 both list 4017.6, and the unrounded best is either, by the last
+    # bits of the renderer's sums)
+    best = min(f["score"] for f in heard["finalists"] if f["from"] == "proposals")
+    ours = {f["candidate"] for f in heard["finalists"]
+            if f["from"] == "proposals" and f["score"] == best}
     assert "displaced" not in never
-    assert heard["displaced"]["candidate"] == ours["candidate"] and heard["displaced"]["from"] == "proposals"
-    assert heard["displaced"]["score"] == ours["score"] and len(heard["displaced"]["pose"]) == 48
+    assert heard["displaced"]["candidate"] in ours and heard["displaced"]["from"] == "proposals"
+    assert heard["displaced"]["score"] == best and len(heard["displaced"]["pose"]) == 48
 
 
 def test_grid_heard_takes_the_searches_named_and_refuses_others():
