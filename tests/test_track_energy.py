@@ -79,6 +79,24 @@ def test_pose_prior_takes_the_hidden_std_on_the_hidden_joints_only():
     assert pose_prior(poses[0], 1.0).shape == (1,)
 
 
+def _turned(ry):
+    """``(48,)`` the zero pose 3 m in front of the camera, its pelvis turned ``ry`` (rad)
+    about the vertical (pi / 2: side on)."""
+    x = np.zeros(48)
+    x[2] = 3.0
+    x[4] = ry
+    return x
+
+
+def _far_arm_raised(pose, far):
+    """``pose`` with the ``far`` ("l" or "r") arm raised overhead at the shoulder."""
+    from depthtrack.body.skeleton import JOINT_ID
+
+    raised = np.array(pose, dtype=np.float64)
+    raised[3 + 3 * JOINT_ID[f"{far}_shoulder"] + 2] = 2.8 if far == "l" else -2.8
+    return raised
+
+
 def _side_view_frame(tracker, pose):
     """The depth of ``pose`` rendered by the tracker's own full-image renderer, observed."""
     from types import SimpleNamespace
@@ -108,9 +126,7 @@ def test_the_far_arm_of_a_side_view_takes_the_hidden_prior():
     camera = Camera.preset("sr4000")
     settings = TrackerSettings(energy={"hidden_prior_std": 0.4})
     with Tracker(body, camera, settings=settings) as tracker:
-        side = np.zeros(48)
-        side[2] = 3.0
-        side[4] = np.pi / 2                                        # pelvis ry: side on
+        side = _turned(np.pi / 2)                                   # pelvis ry: side on
         frame = _side_view_frame(tracker, side)
         hidden = tracker.hidden_joints(frame, side)
         z = body.joint_positions(side)[:, 2]
@@ -155,32 +171,23 @@ def test_far_side_limbs_follow_the_trunk_not_the_limb():
     from the front or the back or beyond ``within_deg`` of a side view; raising the far arm
     over the head (out of the trunk's shadow) changes nothing, since the trunk decides."""
     from depthtrack.body.model import BodyModel
-    from depthtrack.body.skeleton import JOINT_ID
     from depthtrack.contract import JOINT_INDEX
     from depthtrack.track.reach import far_side_limbs
 
     body = BodyModel.default(1.75)
-
-    def turned(ry):
-        x = np.zeros(48)
-        x[2] = 3.0
-        x[4] = ry
-        return x
-
     for ry in (np.pi / 2, 3 * np.pi / 2):
-        joints = body.joint_positions(turned(ry))
+        joints = body.joint_positions(_turned(ry))
         far = "l" if (np.linalg.norm(joints[JOINT_INDEX["l_shoulder"]])
                       > np.linalg.norm(joints[JOINT_INDEX["r_shoulder"]])) else "r"
         assert far_side_limbs(joints, 45.0) == {f"{far}_arm", f"{far}_leg"}
-    assert far_side_limbs(body.joint_positions(turned(np.pi / 2)), 45.0) != far_side_limbs(
-        body.joint_positions(turned(3 * np.pi / 2)), 45.0)
+    assert far_side_limbs(body.joint_positions(_turned(np.pi / 2)), 45.0) != far_side_limbs(
+        body.joint_positions(_turned(3 * np.pi / 2)), 45.0)
     for ry in (0.0, np.pi, np.pi / 2 - np.radians(50)):
-        assert far_side_limbs(body.joint_positions(turned(ry)), 45.0) == set()
-    assert far_side_limbs(body.joint_positions(turned(np.pi / 2 - np.radians(50))), 60.0)
-    side = turned(np.pi / 2)
+        assert far_side_limbs(body.joint_positions(_turned(ry)), 45.0) == set()
+    assert far_side_limbs(body.joint_positions(_turned(np.pi / 2 - np.radians(50))), 60.0)
+    side = _turned(np.pi / 2)
     far = next(iter(far_side_limbs(body.joint_positions(side), 45.0) - {"l_leg", "r_leg"}))[0]
-    raised = side.copy()
-    raised[3 + 3 * JOINT_ID[f"{far}_shoulder"] + 2] = 2.8 if far == "l" else -2.8   # overhead
+    raised = _far_arm_raised(side, far)                              # overhead
     assert far_side_limbs(body.joint_positions(raised), 45.0) == far_side_limbs(
         body.joint_positions(side), 45.0)
 
@@ -197,14 +204,11 @@ def test_the_side_gate_charges_the_far_arm_wherever_it_is():
 
     body = BodyModel.default(1.75)
     camera = Camera.preset("sr4000")
-    side = np.zeros(48)
-    side[2] = 3.0
-    side[4] = np.pi / 2
+    side = _turned(np.pi / 2)
     z = body.joint_positions(side)[:, 2]
     far = "l" if z[JOINT_ID["l_shoulder"]] > z[JOINT_ID["r_shoulder"]] else "r"
     far_arm = {JOINT_ID[f"{far}_{j}"] for j in ("shoulder", "elbow", "wrist")}
-    raised = side.copy()
-    raised[3 + 3 * JOINT_ID[f"{far}_shoulder"] + 2] = 2.8 if far == "l" else -2.8
+    raised = _far_arm_raised(side, far)
     gated = TrackerSettings(energy={"hidden_prior_std": 0.5, "hidden_prior_gate": "side",
                                     "hidden_prior_limbs": "arms"})
     shown = TrackerSettings(energy={"hidden_prior_std": 0.5, "hidden_prior_limbs": "arms"})
@@ -240,9 +244,7 @@ def test_tracking_a_side_view_searches_the_far_arm_under_the_hidden_prior():
 
     body = BodyModel.default(1.75)
     camera = Camera.preset("sr4000")
-    side = np.zeros(48)
-    side[2] = 3.0
-    side[4] = np.pi / 2
+    side = _turned(np.pi / 2)
     for std, counted in ((0.5, 3), (0.0, 0)):
         settings = TrackerSettings(energy={"hidden_prior_std": std})
         with Tracker(body, camera, method="hc", settings=settings, segmenter=segment) as tracker:

@@ -64,6 +64,8 @@ def main(argv=None) -> int:
             raise InputError(None, f"--hidden must be a share between 0 and 1, not {args.hidden}")
         if args.side is not None and not 0 <= args.side <= 90:
             raise InputError(None, f"--side must be 0 to 90 degrees, not {args.side}")
+        if args.arms and args.side is None:
+            raise InputError(None, "--arms narrows --side: give --side DEG too")
         if args.side is not None and args.hidden is not None:
             raise InputError(None, "--side and --hidden choose the limbs two ways: give one")
         seq, body, poses = read_track(args.seq, args.track, [1])
